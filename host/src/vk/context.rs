@@ -1,0 +1,144 @@
+//! The Vulkan context: instance + device + queues + allocator + command pool, shared (`Arc`) by
+//! every RAII object made from it, so each can free itself in `Drop`.
+use super::device::{self, DeviceInfo};
+use super::error::{CallContext, VkError, VkResult};
+use super::instance::Instance;
+use ash::{ext, khr, vk};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+/// How to open the context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Enable the Khronos validation layer with synchronization validation.
+    pub validation: bool,
+    /// Case-insensitive substring of the device name to use.
+    pub device: Option<String>,
+}
+
+pub struct Shared {
+    pub physical: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub info: DeviceInfo,
+    pub queue: Mutex<vk::Queue>,
+    /// Compute-only queue (family `info.async_compute_family`), when the device has one.
+    pub async_compute_queue: Option<Mutex<vk::Queue>>,
+    pub allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub push_descriptor: khr::push_descriptor::Device,
+    debug_utils: Option<ext::debug_utils::Device>,
+    command_pool: Mutex<vk::CommandPool>,
+    /// Dropped last (after `Drop::drop` destroyed the device).
+    pub instance: Instance,
+}
+
+/// Cheap to clone; the device lives until the last clone and the last resource are gone.
+#[derive(Clone)]
+pub struct Context(pub Arc<Shared>);
+
+impl std::ops::Deref for Context {
+    type Target = Shared;
+    fn deref(&self) -> &Shared {
+        &self.0
+    }
+}
+
+impl Context {
+    pub fn new(opts: &ContextOptions) -> VkResult<Self> {
+        let instance = Instance::new(opts.validation)?;
+        let (physical, info) = device::select(&instance.raw, opts.device.as_deref())?;
+        let device = device::create(&instance.raw, physical, &info)?;
+        let queue = unsafe { device.get_device_queue(info.graphics_family, 0) };
+        let async_compute_queue =
+            info.async_compute_family.map(|f| Mutex::new(unsafe { device.get_device_queue(f, 0) }));
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| VkError::Alloc { name: "allocator".into(), bytes: 0, source })?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(info.graphics_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT | vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.call("vkCreateCommandPool")?;
+        let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &device);
+        let debug_utils = instance.debug_utils.then(|| ext::debug_utils::Device::new(&instance.raw, &device));
+        Ok(Self(Arc::new(Shared {
+            physical,
+            device,
+            info,
+            queue: Mutex::new(queue),
+            async_compute_queue,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            push_descriptor,
+            debug_utils,
+            command_pool: Mutex::new(command_pool),
+            instance,
+        })))
+    }
+
+    /// Validation messages reported so far (always empty without validation).
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.instance.messages()
+    }
+
+    /// Takes (and clears) the validation messages reported so far.
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.instance.take_messages()
+    }
+
+    /// Gives a Vulkan object a debug name (shown by RenderDoc and in validation messages).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(du) = &self.debug_utils {
+            let Ok(name) = std::ffi::CString::new(name.replace('\0', " ")) else { return };
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+            // Naming is best effort: a failure only loses a label.
+            let _ = unsafe { du.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Records commands with `record`, submits them to the graphics+compute queue and waits.
+    pub fn submit_and_wait<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> VkResult<R>) -> VkResult<R> {
+        let d = &self.device;
+        let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { d.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers")?[0];
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { d.begin_command_buffer(cmd, &begin) }.call("vkBeginCommandBuffer")?;
+            let r = record(cmd)?;
+            unsafe { d.end_command_buffer(cmd) }.call("vkEndCommandBuffer")?;
+            let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.call("vkCreateFence")?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            let submitted = {
+                let q = self.queue.lock().unwrap_or_else(|e| e.into_inner());
+                unsafe { d.queue_submit(*q, &[submit], fence) }.call("vkQueueSubmit")
+            };
+            let waited = submitted.and_then(|_| unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.call("vkWaitForFences"));
+            unsafe { d.destroy_fence(fence, None) };
+            waited.map(|_| r)
+        })();
+        unsafe { d.free_command_buffers(*pool, &[cmd]) };
+        result
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds an `Arc` to this, so none is alive any more; the device is
+        // idle after the wait. Order: allocator → pool → device; `instance` drops after this.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|e| e.into_inner()), None);
+            self.device.destroy_device(None);
+        }
+    }
+}

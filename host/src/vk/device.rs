@@ -1,0 +1,216 @@
+//! Physical-device selection and what we learn about the chosen device.
+//!
+//! Selection: with a wanted substring (`--device`, `MANYLIGHTS_DEVICE`) the first device whose
+//! name contains it (case-insensitive); otherwise the best usable one by type (discrete >
+//! integrated > virtual > CPU). A device is usable when it offers Vulkan 1.3, compute-stage
+//! subgroup ballot + shuffle, the Vulkan memory model at device scope, 64-bit integers and
+//! `VK_KHR_push_descriptor`. Errors list every device with the reason it was not taken.
+use super::error::{CallContext, VkError, VkResult};
+use ash::{khr, vk};
+use std::ffi::CStr;
+
+/// Facts about the selected device (also written into stats files).
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub kind: &'static str,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub api_version: String,
+    /// The subgroup width compute kernels run with (never hard-coded: read here).
+    pub subgroup_size: u32,
+    pub min_subgroup_size: u32,
+    pub max_subgroup_size: u32,
+    /// Whether pipelines can require full subgroups (`computeFullSubgroups`).
+    pub full_subgroups: bool,
+    pub timestamp_period_ns: f32,
+    pub timestamp_valid_bits: u32,
+    pub max_shared_memory_bytes: u32,
+    pub max_storage_buffer_range: u32,
+    pub max_workgroup_invocations: u32,
+    pub graphics_family: u32,
+    /// A compute-only queue family ("async compute"), when the device has one.
+    pub async_compute_family: Option<u32>,
+}
+
+impl DeviceInfo {
+    /// One line naming the device, e.g. for the CLI's stderr and the notes.
+    pub fn line(&self) -> String {
+        format!(
+            "{} ({}; driver {} {}; Vulkan {}; subgroup {} [{}..{}]; shared memory {} KiB)",
+            self.name,
+            self.kind,
+            self.driver_name,
+            self.driver_info,
+            self.api_version,
+            self.subgroup_size,
+            self.min_subgroup_size,
+            self.max_subgroup_size,
+            self.max_shared_memory_bytes / 1024
+        )
+    }
+}
+
+fn kind_name(t: vk::PhysicalDeviceType) -> (&'static str, u32) {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => ("discrete GPU", 0),
+        vk::PhysicalDeviceType::INTEGRATED_GPU => ("integrated GPU", 1),
+        vk::PhysicalDeviceType::VIRTUAL_GPU => ("virtual GPU", 2),
+        vk::PhysicalDeviceType::CPU => ("CPU", 3),
+        _ => ("other", 4),
+    }
+}
+
+fn version(v: u32) -> String {
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+}
+
+fn cstr(bytes: &[std::ffi::c_char]) -> String {
+    // SAFETY: Vulkan fixed-size strings are NUL-terminated within their array.
+    unsafe { CStr::from_ptr(bytes.as_ptr()) }.to_string_lossy().into_owned()
+}
+
+/// Inspects one device: its info, its type rank, or why it cannot be used.
+fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(DeviceInfo, u32, Option<String>)> {
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut v13 = vk::PhysicalDeviceVulkan13Properties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut subgroup)
+        .push_next(&mut driver)
+        .push_next(&mut v13);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    let p = props2.properties;
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12).push_next(&mut f13);
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    let f10 = f2.features;
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
+        .call("vkEnumerateDeviceExtensionProperties")?;
+    let has_push = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(khr::push_descriptor::NAME));
+
+    let gfx = families.iter().position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
+    let async_compute = families
+        .iter()
+        .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && !q.queue_flags.contains(vk::QueueFlags::GRAPHICS));
+    let (kind, rank) = kind_name(p.device_type);
+    let info = DeviceInfo {
+        name: cstr(&p.device_name),
+        kind,
+        driver_name: cstr(&driver.driver_name),
+        driver_info: cstr(&driver.driver_info),
+        api_version: version(p.api_version),
+        subgroup_size: subgroup.subgroup_size,
+        min_subgroup_size: v13.min_subgroup_size.max(1),
+        max_subgroup_size: v13.max_subgroup_size.max(subgroup.subgroup_size),
+        full_subgroups: f13.compute_full_subgroups == vk::TRUE,
+        timestamp_period_ns: p.limits.timestamp_period,
+        timestamp_valid_bits: gfx.map(|g| families[g].timestamp_valid_bits).unwrap_or(0),
+        max_shared_memory_bytes: p.limits.max_compute_shared_memory_size,
+        max_storage_buffer_range: p.limits.max_storage_buffer_range,
+        max_workgroup_invocations: p.limits.max_compute_work_group_invocations,
+        graphics_family: gfx.unwrap_or(0) as u32,
+        async_compute_family: async_compute.map(|f| f as u32),
+    };
+    let mut missing = Vec::new();
+    if p.api_version < vk::API_VERSION_1_3 {
+        missing.push(format!("Vulkan 1.3 (has {})", info.api_version));
+    }
+    if gfx.is_none() {
+        missing.push("a graphics+compute queue".into());
+    }
+    if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE) {
+        missing.push("subgroup operations in compute shaders".into());
+    }
+    let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::SHUFFLE;
+    if !subgroup.supported_operations.contains(ops) {
+        missing.push(format!("subgroup basic/ballot/shuffle (has {:?})", subgroup.supported_operations));
+    }
+    if f12.vulkan_memory_model == 0 || f12.vulkan_memory_model_device_scope == 0 {
+        missing.push("vulkanMemoryModel + vulkanMemoryModelDeviceScope".into());
+    }
+    if f10.shader_int64 == 0 {
+        missing.push("shaderInt64".into());
+    }
+    if !has_push {
+        missing.push("VK_KHR_push_descriptor".into());
+    }
+    if info.subgroup_size > 128 || !info.subgroup_size.is_power_of_two() {
+        missing.push(format!("a power-of-two subgroup size <= 128 (has {})", info.subgroup_size));
+    }
+    let why = (!missing.is_empty()).then(|| missing.join(", "));
+    Ok((info, rank, why))
+}
+
+/// Every physical device with its info, type rank, and why it is unusable (None: usable).
+pub fn list(instance: &ash::Instance) -> VkResult<Vec<(vk::PhysicalDevice, DeviceInfo, u32, Option<String>)>> {
+    let devices = unsafe { instance.enumerate_physical_devices() }.call("vkEnumeratePhysicalDevices")?;
+    devices
+        .into_iter()
+        .map(|pd| inspect(instance, pd).map(|(info, rank, why)| (pd, info, rank, why)))
+        .collect()
+}
+
+/// Chooses the physical device (see the module docs).
+pub fn select(instance: &ash::Instance, wanted: Option<&str>) -> VkResult<(vk::PhysicalDevice, DeviceInfo)> {
+    let inspected = list(instance)?;
+    if inspected.is_empty() {
+        return Err(VkError::NoDevices);
+    }
+    let listing = inspected
+        .iter()
+        .map(|(_, i, _, why)| match why {
+            None => format!("  {} ({})", i.name, i.kind),
+            Some(w) => format!("  {} ({}) — unusable: lacks {}", i.name, i.kind, w),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let wanted = wanted.map(str::trim).filter(|w| !w.is_empty());
+    let pick = match wanted {
+        Some(w) => {
+            let lw = w.to_lowercase();
+            let found = inspected.iter().find(|(_, i, _, _)| i.name.to_lowercase().contains(&lw));
+            match found {
+                Some((_, i, _, Some(why))) => {
+                    return Err(VkError::Unsupported { device: i.name.clone(), missing: why.clone() })
+                }
+                Some(d) => d,
+                None => return Err(VkError::NoMatchingDevice { wanted: w.into(), listing }),
+            }
+        }
+        None => match inspected.iter().filter(|d| d.3.is_none()).min_by_key(|d| d.2) {
+            Some(d) => d,
+            None => return Err(VkError::NoMatchingDevice { wanted: "any usable device".into(), listing }),
+        },
+    };
+    Ok((pick.0, pick.1.clone()))
+}
+
+/// Creates the logical device with the features the kernels need; returns it and its queues.
+pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo) -> VkResult<ash::Device> {
+    let priorities = [1.0f32];
+    let mut queues = vec![vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(info.graphics_family)
+        .queue_priorities(&priorities)];
+    if let Some(f) = info.async_compute_family {
+        queues.push(vk::DeviceQueueCreateInfo::default().queue_family_index(f).queue_priorities(&priorities));
+    }
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+        .vulkan_memory_model(true)
+        .vulkan_memory_model_device_scope(true)
+        .host_query_reset(true);
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .subgroup_size_control(true)
+        .compute_full_subgroups(info.full_subgroups)
+        .synchronization2(true);
+    let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
+    let exts = [khr::push_descriptor::NAME.as_ptr()];
+    let create = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&exts)
+        .push_next(&mut f2);
+    unsafe { instance.create_device(pd, &create, None) }.call("vkCreateDevice")
+}

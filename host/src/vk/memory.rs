@@ -1,0 +1,185 @@
+//! RAII buffers on `gpu-allocator`, with upload and read-back.
+//!
+//! Device-local buffers (`MemoryLocation::GpuOnly`) are filled and read through a temporary
+//! staging buffer and a copy on the queue; host-visible ones are mapped. Vulkan forbids
+//! zero-sized buffers, so sizes are rounded up to [`MIN_BUFFER_BYTES`] (an empty input is valid,
+//! it just occupies one minimal buffer).
+use super::context::Context;
+use super::error::{CallContext, VkError, VkResult};
+use ash::vk;
+use bytemuck::Pod;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+pub use gpu_allocator::MemoryLocation;
+
+/// Smallest buffer made (bytes).
+pub const MIN_BUFFER_BYTES: u64 = 16;
+
+/// Usage of every storage buffer: read/written by kernels, copied to/from staging.
+pub const STORAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_SRC.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+pub struct Buffer {
+    ctx: Context,
+    pub raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    /// Bytes (after rounding up).
+    pub size: u64,
+    pub name: String,
+    pub location: MemoryLocation,
+}
+
+impl Buffer {
+    /// A buffer of at least `size` bytes.
+    pub fn new(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Self> {
+        let size = size.max(MIN_BUFFER_BYTES).next_multiple_of(4);
+        let d = &ctx.device;
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { d.create_buffer(&info, None) }.call("vkCreateBuffer")?;
+        let requirements = unsafe { d.get_buffer_memory_requirements(raw) };
+        let allocated = ctx.allocator.lock().unwrap_or_else(|e| e.into_inner()).allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocated {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { d.destroy_buffer(raw, None) };
+                return Err(VkError::Alloc { name: name.into(), bytes: size, source });
+            }
+        };
+        if let Err(e) = unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.call("vkBindBufferMemory") {
+            let _ = ctx.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(allocation);
+            unsafe { d.destroy_buffer(raw, None) };
+            return Err(e);
+        }
+        ctx.set_name(raw, name);
+        Ok(Self { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.into(), location })
+    }
+
+    /// A device-local storage buffer of `size` bytes (contents undefined until written).
+    pub fn storage(ctx: &Context, name: &str, size: u64) -> VkResult<Self> {
+        Self::new(ctx, name, size, STORAGE, MemoryLocation::GpuOnly)
+    }
+
+    /// A device-local storage buffer holding `data`.
+    pub fn from_slice<T: Pod>(ctx: &Context, name: &str, data: &[T]) -> VkResult<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut b = Self::storage(ctx, name, bytes.len() as u64)?;
+        b.write(data)?;
+        Ok(b)
+    }
+
+    fn mapped(&mut self) -> Option<&mut [u8]> {
+        self.allocation.as_mut().and_then(|a| a.mapped_slice_mut())
+    }
+
+    /// Writes `data` at the start of the buffer (mapped, or staged and copied).
+    pub fn write<T: Pod>(&mut self, data: &[T]) -> VkResult<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let need = bytes.len() as u64;
+        if need > self.size {
+            return Err(VkError::BufferTooSmall { name: self.name.clone(), have: self.size, need });
+        }
+        if need == 0 {
+            return Ok(());
+        }
+        if let Some(m) = self.mapped() {
+            m[..bytes.len()].copy_from_slice(bytes);
+            return Ok(());
+        }
+        let mut staging = Self::new(
+            &self.ctx,
+            &format!("{} (upload)", self.name),
+            need,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(data)?;
+        let (src, dst) = (staging.raw, self.raw);
+        self.ctx.submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy::default().size(need)];
+            unsafe { self.ctx.device.cmd_copy_buffer(cmd, src, dst, &region) };
+            barrier(&self.ctx, cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+            Ok(())
+        })
+    }
+
+    /// Reads the first `count` elements back to the host.
+    pub fn read<T: Pod>(&mut self, count: usize) -> VkResult<Vec<T>> {
+        let need = (count * std::mem::size_of::<T>()) as u64;
+        if need > self.size {
+            return Err(VkError::BufferTooSmall { name: self.name.clone(), have: self.size, need });
+        }
+        if need == 0 {
+            return Ok(Vec::new());
+        }
+        if let Some(m) = self.mapped() {
+            return Ok(bytemuck::pod_collect_to_vec(&m[..need as usize]));
+        }
+        let mut staging = Self::new(
+            &self.ctx,
+            &format!("{} (read-back)", self.name),
+            need,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let (src, dst) = (self.raw, staging.raw);
+        self.ctx.submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy::default().size(need)];
+            unsafe { self.ctx.device.cmd_copy_buffer(cmd, src, dst, &region) };
+            let host = vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ);
+            unsafe {
+                self.ctx.device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &[host],
+                    &[],
+                    &[],
+                )
+            };
+            Ok(())
+        })?;
+        staging.read(count)
+    }
+}
+
+/// Makes prior writes (`src_access` in `src_stage`) visible to later compute shaders and copies.
+pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer, src_access: vk::AccessFlags, src_stage: vk::PipelineStageFlags) {
+    let b = vk::MemoryBarrier::default().src_access_mask(src_access).dst_access_mask(
+        vk::AccessFlags::SHADER_READ
+            | vk::AccessFlags::SHADER_WRITE
+            | vk::AccessFlags::TRANSFER_READ
+            | vk::AccessFlags::TRANSFER_WRITE,
+    );
+    unsafe {
+        ctx.device.cmd_pipeline_barrier(
+            cmd,
+            src_stage,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[b],
+            &[],
+            &[],
+        )
+    };
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.allocator.lock().unwrap_or_else(|e| e.into_inner()).free(a);
+        }
+        // SAFETY: every submission using the buffer was waited for (`submit_and_wait`).
+        unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
+    }
+}

@@ -1,0 +1,24 @@
+//! The Vulkan layer: small RAII types over `ash`, no algorithm code.
+//!
+//! | file | what |
+//! |---|---|
+//! | `instance.rs` | instance, validation layer + synchronization validation, message capture |
+//! | `device.rs` | physical-device selection (`--device`), capabilities, logical device |
+//! | `context.rs` | the shared context (device, queues, allocator, command submission) |
+//! | `memory.rs` | buffers (`gpu-allocator`), upload/read-back, barriers |
+//! | `pipeline.rs` | shader modules, typed compute pipelines, the dispatch recorder |
+//! | `profiler.rs` | GPU timestamps per pass |
+pub mod context;
+pub mod device;
+pub mod error;
+pub mod instance;
+pub mod memory;
+pub mod pipeline;
+pub mod profiler;
+
+pub use context::{Context, ContextOptions};
+pub use device::DeviceInfo;
+pub use error::{VkError, VkResult};
+pub use memory::{Buffer, MemoryLocation};
+pub use pipeline::{ComputePipeline, Recorder, ShaderModule};
+pub use profiler::{PassTiming, Profiler};

@@ -1,0 +1,185 @@
+//! Shader modules, typed compute pipelines and the command recorder that dispatches them.
+//!
+//! Bindings use `VK_KHR_push_descriptor`: each dispatch pushes its storage buffers (set 0,
+//! bindings `0..n` in the order of the kernel handle), so no descriptor pools or sets are managed.
+//! Every dispatch is followed by a compute→compute/transfer memory barrier: passes are serialised,
+//! which keeps synchronization validation clean (passes that could overlap will opt out later).
+use super::context::Context;
+use super::error::{CallContext, VkError, VkResult};
+use super::memory::{barrier, Buffer};
+use super::profiler::Profiler;
+use ash::vk;
+use bytemuck::Pod;
+use shaders::kernels::Kernel;
+use std::ffi::CString;
+
+pub struct ShaderModule {
+    ctx: Context,
+    pub raw: vk::ShaderModule,
+}
+
+impl ShaderModule {
+    /// Creates a module from SPIR-V bytes (little-endian words).
+    pub fn new(ctx: &Context, name: &str, spirv: &[u8]) -> VkResult<Self> {
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+            .map_err(|e| VkError::Kernel { entry: "<module>", what: format!("{name}: invalid SPIR-V: {e}") })?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        let raw = unsafe { ctx.device.create_shader_module(&info, None) }.call("vkCreateShaderModule")?;
+        ctx.set_name(raw, name);
+        Ok(Self { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for ShaderModule {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// A compute pipeline for kernel handle `Kernel<P>`: dispatching it takes a `&P`.
+pub struct ComputePipeline<P> {
+    ctx: Context,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    pub kernel: Kernel<P>,
+}
+
+impl<P: Pod> ComputePipeline<P> {
+    pub fn new(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>) -> VkResult<Self> {
+        let d = &ctx.device;
+        let bindings: Vec<_> = (0..kernel.storage_buffers)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&bindings);
+        let set_layout = unsafe { d.create_descriptor_set_layout(&set_info, None) }.call("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(std::mem::size_of::<P>() as u32)];
+        let set_layouts = [set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if std::mem::size_of::<P>() > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }.call("vkCreatePipelineLayout") {
+            Ok(l) => l,
+            Err(e) => {
+                unsafe { d.destroy_descriptor_set_layout(set_layout, None) };
+                return Err(e);
+            }
+        };
+        let entry = CString::new(kernel.entry).expect("entry names have no NUL");
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(&entry);
+        let full = kernel.cooperative
+            && ctx.info.full_subgroups
+            && kernel.workgroup_size[0] % ctx.info.max_subgroup_size == 0;
+        if full {
+            stage = stage.flags(vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS);
+        }
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        let raw = match unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) } {
+            Ok(p) => p[0],
+            Err((_, result)) => {
+                unsafe {
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                }
+                return Err(VkError::Call { call: "vkCreateComputePipelines", result });
+            }
+        };
+        ctx.set_name(raw, kernel.entry);
+        Ok(Self { ctx: ctx.clone(), raw, layout, set_layout, kernel })
+    }
+}
+
+impl<P> Drop for ComputePipeline<P> {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device.destroy_pipeline(self.raw, None);
+            self.ctx.device.destroy_pipeline_layout(self.layout, None);
+            self.ctx.device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// Records dispatches (and profiler scopes) into one command buffer.
+pub struct Recorder<'a> {
+    pub ctx: &'a Context,
+    pub cmd: vk::CommandBuffer,
+    pub profiler: Option<&'a mut Profiler>,
+}
+
+impl Recorder<'_> {
+    /// Dispatches `groups` workgroups of `pipe` with `buffers` at bindings `0..n` and `params`
+    /// as push constants, then a barrier.
+    pub fn dispatch<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, groups: [u32; 3]) -> VkResult<()> {
+        let k = &pipe.kernel;
+        if buffers.len() != k.storage_buffers as usize {
+            return Err(VkError::Kernel {
+                entry: k.entry,
+                what: format!("binds {} storage buffers, {} given", k.storage_buffers, buffers.len()),
+            });
+        }
+        let limit = 65_535;
+        if groups.iter().any(|&g| g > limit) {
+            return Err(VkError::Kernel { entry: k.entry, what: format!("dispatch of {groups:?} workgroups exceeds {limit} per axis") });
+        }
+        if groups.contains(&0) {
+            return Ok(());
+        }
+        let d = &self.ctx.device;
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipe.raw);
+            if !writes.is_empty() {
+                self.ctx.push_descriptor.cmd_push_descriptor_set(self.cmd, vk::PipelineBindPoint::COMPUTE, pipe.layout, 0, &writes);
+            }
+            if std::mem::size_of::<P>() > 0 {
+                d.cmd_push_constants(self.cmd, pipe.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(params));
+            }
+            d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
+        }
+        barrier(self.ctx, self.cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::COMPUTE_SHADER);
+        Ok(())
+    }
+
+    /// Dispatches enough workgroups to cover `invocations` (x, y, z) threads.
+    pub fn dispatch_threads<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, invocations: [u32; 3]) -> VkResult<()> {
+        let wg = pipe.kernel.workgroup_size;
+        let groups = [0, 1, 2].map(|a| invocations[a].div_ceil(wg[a]));
+        self.dispatch(pipe, buffers, params, groups)
+    }
+
+    /// Runs `f` inside a named GPU-timed pass (when a profiler is attached).
+    pub fn pass<R>(&mut self, name: &str, f: impl FnOnce(&mut Self) -> VkResult<R>) -> VkResult<R> {
+        let cmd = self.cmd;
+        let scope = self.profiler.as_mut().map(|p| p.begin(cmd, name));
+        let r = f(self)?;
+        if let (Some(p), Some(s)) = (self.profiler.as_mut(), scope) {
+            p.end(cmd, s);
+        }
+        Ok(r)
+    }
+}

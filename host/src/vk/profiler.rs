@@ -1,0 +1,98 @@
+//! GPU timestamp profiler: per-pass milliseconds from `vkCmdWriteTimestamp`.
+//!
+//! A pass is bracketed by a top-of-pipe and a bottom-of-pipe timestamp; the difference times the
+//! device's `timestampPeriod` is the pass's GPU time. Devices whose queue reports no valid
+//! timestamp bits get a disabled profiler (no timings, never a wrong one).
+use super::context::Context;
+use super::error::{CallContext, VkResult};
+use ash::vk;
+
+/// One timed pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTiming {
+    pub name: String,
+    pub ms: f64,
+}
+
+pub struct Profiler {
+    ctx: Context,
+    pool: vk::QueryPool,
+    capacity: u32,
+    names: Vec<String>,
+}
+
+impl Profiler {
+    /// Room for `passes` timed passes per submission.
+    pub fn new(ctx: &Context, passes: u32) -> VkResult<Self> {
+        let mut pool = vk::QueryPool::null();
+        if ctx.info.timestamp_valid_bits > 0 {
+            let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2 * passes);
+            pool = unsafe { ctx.device.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
+            ctx.set_name(pool, "profiler timestamps");
+        }
+        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, names: Vec::new() })
+    }
+
+    pub fn enabled(&self) -> bool {
+        self.pool != vk::QueryPool::null()
+    }
+
+    /// Resets the queries; record before the first pass of a submission.
+    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
+        self.names.clear();
+        if self.enabled() {
+            unsafe { self.ctx.device.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
+        }
+    }
+
+    /// Starts a pass; returns its slot (None when disabled or full).
+    pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Option<u32> {
+        if !self.enabled() || self.names.len() as u32 >= self.capacity {
+            return None;
+        }
+        let slot = self.names.len() as u32;
+        self.names.push(name.to_owned());
+        unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * slot) };
+        Some(slot)
+    }
+
+    pub fn end(&mut self, cmd: vk::CommandBuffer, slot: Option<u32>) {
+        if let Some(s) = slot {
+            unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, 2 * s + 1) };
+        }
+    }
+
+    /// The timings of the last submission (call after it completed).
+    pub fn results(&self) -> VkResult<Vec<PassTiming>> {
+        if !self.enabled() || self.names.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut raw = vec![0u64; 2 * self.names.len()];
+        unsafe {
+            self.ctx
+                .device
+                .get_query_pool_results(self.pool, 0, &mut raw, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
+        }
+        .call("vkGetQueryPoolResults")?;
+        let bits = self.ctx.info.timestamp_valid_bits;
+        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let period = self.ctx.info.timestamp_period_ns as f64;
+        Ok(self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                let ticks = (raw[2 * i + 1] & mask).wrapping_sub(raw[2 * i] & mask) & mask;
+                PassTiming { name: n.clone(), ms: ticks as f64 * period * 1e-6 }
+            })
+            .collect())
+    }
+}
+
+impl Drop for Profiler {
+    fn drop(&mut self) {
+        if self.enabled() {
+            unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! Cooperative-kernel abstraction: one kernel source for the GPU and for `cargo test`.
+//!
+//! A *cooperative* kernel is one whose invocations talk to each other: subgroup shuffles and
+//! ballots, workgroup memory, workgroup barriers. Such code cannot be unit-tested by calling it
+//! once per invocation, so every cooperative kernel here is written against two small traits:
+//!
+//! * [`Coop`] — the invocation's place in its subgroup/workgroup and the subgroup/workgroup
+//!   operations. [`gpu::GpuCoop`] maps them 1:1 to SPIR-V (`OpGroupNonUniform*`,
+//!   `OpControlBarrier`); [`cpu`] emulates a workgroup with one OS thread per invocation run in
+//!   lock-step at every collective operation, with the subgroup width as a parameter (4…64), so
+//!   the same kernel is tested at widths the local GPU does not have.
+//! * [`SharedU32`] — workgroup memory as an array of `u32`. On the GPU it is the
+//!   `#[spirv(workgroup)] &mut [u32; N]` entry parameter itself; on the CPU a handle over
+//!   atomics shared by the emulated invocations.
+//!
+//! Rules a cooperative kernel follows (they are also the GPU's rules):
+//! 1. Subgroup operations are called in subgroup-uniform control flow: every lane of the subgroup
+//!    reaches the same call (the CPU emulation deadlocks on a test otherwise, which is the point).
+//! 2. `workgroup_barrier` is called in workgroup-uniform control flow.
+//! 3. Lane numbering comes from the built-ins (`lane()`, `subgroup_id()`), never from
+//!    `local_index % width`: Vulkan does not promise that mapping.
+//! 4. The workgroup size is a multiple of the subgroup size (the host requests full subgroups).
+
+pub mod gpu;
+
+#[cfg(not(target_arch = "spirv"))]
+pub mod cpu;
+
+/// Subgroup and workgroup operations of one invocation.
+pub trait Coop {
+    /// Invocations per subgroup (the SPIR-V `SubgroupSize` built-in).
+    fn subgroup_size(&self) -> u32;
+    /// This invocation's lane in its subgroup (`SubgroupLocalInvocationId`).
+    fn lane(&self) -> u32;
+    /// This invocation's subgroup within the workgroup (`SubgroupId`).
+    fn subgroup_id(&self) -> u32;
+    /// Subgroups in the workgroup (`NumSubgroups`).
+    fn num_subgroups(&self) -> u32;
+    /// `LocalInvocationIndex`.
+    fn local_index(&self) -> u32;
+    /// Value of `v` held by lane `src` (must be `< subgroup_size`).
+    fn shuffle(&self, v: u32, src: u32) -> u32;
+    /// Value of `v` held by lane `lane() ^ mask`.
+    fn shuffle_xor(&self, v: u32, mask: u32) -> u32;
+    /// Bit `l` of the result is set when lane `l` passed `true` (128 bits: up to 128 lanes).
+    fn ballot(&self, pred: bool) -> [u32; 4];
+    /// Control barrier + workgroup-memory acquire/release over the whole workgroup.
+    fn workgroup_barrier(&self);
+}
+
+/// Workgroup memory seen as `u32` words.
+pub trait SharedU32 {
+    fn load(&self, i: u32) -> u32;
+    fn store(&mut self, i: u32, v: u32);
+}
+
+impl<const N: usize> SharedU32 for [u32; N] {
+    #[inline]
+    fn load(&self, i: u32) -> u32 {
+        self[i as usize]
+    }
+    #[inline]
+    fn store(&mut self, i: u32, v: u32) {
+        self[i as usize] = v;
+    }
+}
+
+/// Number of set bits among the lanes below `lane` in a ballot (the "exclusive bit count" used to
+/// give each voting lane a dense slot).
+#[inline]
+pub fn ballot_rank(mask: [u32; 4], lane: u32) -> u32 {
+    let mut n = 0;
+    let mut w = 0;
+    while w < 4 {
+        let lo = w * 32;
+        let bits = if lane >= lo + 32 {
+            mask[w as usize]
+        } else if lane > lo {
+            mask[w as usize] & ((1u32 << (lane - lo)) - 1)
+        } else {
+            0
+        };
+        n += bits.count_ones();
+        w += 1;
+    }
+    n
+}
+
+/// Total set bits of a ballot.
+#[inline]
+pub fn ballot_count(mask: [u32; 4]) -> u32 {
+    mask[0].count_ones() + mask[1].count_ones() + mask[2].count_ones() + mask[3].count_ones()
+}

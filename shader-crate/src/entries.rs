@@ -1,0 +1,111 @@
+//! `#[spirv]` entry points. Each one only unpacks built-ins and buffers, bounds-checks its
+//! invocation and calls a pure function from another module. The literal workgroup sizes here
+//! must match the handles in [`crate::kernels`] (the GPU parity tests cover every element, so a
+//! mismatch fails them).
+use crate::coop::gpu::GpuCoop;
+use crate::layout::*;
+use crate::{debug_view, octahedral, scan};
+use spirv_std::glam::UVec3;
+use spirv_std::spirv;
+
+/// Normal encode → decode round trip ([`octahedral`]).
+#[spirv(compute(threads(64)))]
+pub fn octa_roundtrip(
+    #[spirv(global_invocation_id)] gid: UVec3,
+    #[spirv(push_constant)] p: &OctaParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] normals: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] encoded: &mut [[u32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] decoded: &mut [[f32; 4]],
+) {
+    let i = gid.x as usize;
+    if gid.x >= p.count {
+        return;
+    }
+    let n = normals[i];
+    let precision = octahedral::Precision::from_u32(p.precision);
+    let w = octahedral::encode([n[0], n[1], n[2]], precision);
+    let d = octahedral::decode(w, precision);
+    encoded[i] = [w[0], w[1], w[2], 0];
+    decoded[i] = [d[0], d[1], d[2], 0.0];
+}
+
+/// Cluster keys of `(pixel, view_z)` samples ([`crate::cluster_key`]).
+#[spirv(compute(threads(64)))]
+pub fn cluster_keys(
+    #[spirv(global_invocation_id)] gid: UVec3,
+    #[spirv(push_constant)] p: &ClusterKeyParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] samples: &[KeySample],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] slice_bounds: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] keys: &mut [u32],
+) {
+    let i = gid.x as usize;
+    if gid.x >= p.count {
+        return;
+    }
+    let s = samples[i];
+    keys[i] = p.grid.key(slice_bounds, s.px, s.py, s.view_z);
+}
+
+/// 30- and 63-bit Morton codes of positions ([`morton`]).
+#[spirv(compute(threads(64)))]
+pub fn morton_codes(
+    #[spirv(global_invocation_id)] gid: UVec3,
+    #[spirv(push_constant)] p: &MortonParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[[f32; 4]],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] codes30: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] codes63: &mut [[u32; 2]],
+) {
+    let i = gid.x as usize;
+    if gid.x >= p.count {
+        return;
+    }
+    let q = positions[i];
+    let pos = [q[0], q[1], q[2]];
+    codes30[i] = p.q30.morton30_of(pos);
+    let c = p.q63.morton63_of(pos);
+    codes63[i] = [c as u32, (c >> 32) as u32];
+}
+
+/// Workgroup exclusive scan ([`scan::workgroup_exclusive_scan`]); also writes each workgroup's
+/// total. Cooperative: every invocation takes part, out-of-range ones with value 0.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn workgroup_scan(
+    #[spirv(global_invocation_id)] gid: UVec3,
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &ScanParams,
+    #[spirv(workgroup)] shared: &mut [u32; scan::SCAN_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] input: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] output: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] totals: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let i = gid.x as usize;
+    let v = if gid.x < p.count { input[i] } else { 0 };
+    let (prefix, total) = scan::workgroup_exclusive_scan(&c, shared, v);
+    if gid.x < p.count {
+        output[i] = prefix;
+    }
+    if local_index == 0 {
+        totals[wg.x as usize] = total;
+    }
+}
+
+/// Debug frame of the analytic scene ([`debug_view`]); 8×8 pixel tiles.
+#[spirv(compute(threads(8, 8)))]
+pub fn debug_view(
+    #[spirv(global_invocation_id)] gid: UVec3,
+    #[spirv(push_constant)] p: &DebugViewParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slice_bounds: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] pixels: &mut [u32],
+) {
+    if gid.x >= p.grid.width || gid.y >= p.grid.height {
+        return;
+    }
+    pixels[(gid.y * p.grid.width + gid.x) as usize] = debug_view::shade_pixel(p, slice_bounds, gid.x, gid.y);
+}

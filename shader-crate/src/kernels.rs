@@ -1,0 +1,43 @@
+//! Typed kernel handles: the one place an entry-point name is written down (host side only).
+//! A handle carries its push-constant type `P`, the number of storage buffers the entry binds
+//! (set 0, bindings `0..storage_buffers`, in order) and its workgroup size, so the host cannot
+//! dispatch a kernel with the wrong parameters or buffer count.
+use crate::layout::*;
+use core::marker::PhantomData;
+
+/// A compute entry point of the kernel module.
+pub struct Kernel<P> {
+    /// SPIR-V entry-point name: rust-gpu names entries by their path in the crate (`entries::name`).
+    pub entry: &'static str,
+    /// Storage buffers bound at set 0, bindings `0..storage_buffers`.
+    pub storage_buffers: u32,
+    /// Local size `[x, y, z]` (must match the entry's `threads(..)`).
+    pub workgroup_size: [u32; 3],
+    /// Uses subgroup operations: the host then requires full subgroups.
+    pub cooperative: bool,
+    _params: PhantomData<fn() -> P>,
+}
+
+impl<P> Kernel<P> {
+    const fn new(entry: &'static str, storage_buffers: u32, workgroup_size: [u32; 3], cooperative: bool) -> Self {
+        Self { entry, storage_buffers, workgroup_size, cooperative, _params: PhantomData }
+    }
+
+    /// Invocations per workgroup.
+    pub const fn invocations(&self) -> u32 {
+        self.workgroup_size[0] * self.workgroup_size[1] * self.workgroup_size[2]
+    }
+}
+
+impl<P> Clone for Kernel<P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<P> Copy for Kernel<P> {}
+
+pub const OCTA_ROUNDTRIP: Kernel<OctaParams> = Kernel::new("entries::octa_roundtrip", 3, [64, 1, 1], false);
+pub const CLUSTER_KEYS: Kernel<ClusterKeyParams> = Kernel::new("entries::cluster_keys", 3, [64, 1, 1], false);
+pub const MORTON_CODES: Kernel<MortonParams> = Kernel::new("entries::morton_codes", 3, [64, 1, 1], false);
+pub const WORKGROUP_SCAN: Kernel<ScanParams> = Kernel::new("entries::workgroup_scan", 3, [crate::scan::SCAN_WORKGROUP, 1, 1], true);
+pub const DEBUG_VIEW: Kernel<DebugViewParams> = Kernel::new("entries::debug_view", 2, [8, 8, 1], false);

@@ -1,0 +1,133 @@
+//! Every host↔GPU struct and constant, in one place.
+//!
+//! Rules: `#[repr(C)]`, only `u32`/`f32`/arrays of them (no `vec3`: std430 would pad it), explicit
+//! padding fields, size a multiple of 16 bytes, and a compile-time size assert next to each
+//! struct. The host derives `bytemuck::Pod` (derive is compiled only off the GPU). Push-constant
+//! structs stay within the 128 bytes Vulkan guarantees ([`MAX_PUSH_CONSTANT_BYTES`]).
+
+#[cfg(not(target_arch = "spirv"))]
+use bytemuck::{Pod, Zeroable};
+
+/// Push-constant bytes every Vulkan implementation provides.
+pub const MAX_PUSH_CONSTANT_BYTES: usize = 128;
+
+/// Screen tiles × exponential depth slices (Olsson et al. 2012, §3.1; Karas' Vulkan design).
+/// Built on the host by [`ClusterGrid::new`](crate::cluster_key); methods in [`crate::cluster_key`].
+///
+/// Cluster key bit layout (widths derived from the resolution, see `cluster_key`):
+/// ```text
+///  31            bits_i+bits_j   bits_i          0
+///  ┌────────────────┬───────────────┬─────────────┐
+///  │  k (slice)     │  j (tile row) │ i (tile col)│
+///  └────────────────┴───────────────┴─────────────┘
+///   bits_k bits       bits_j bits     bits_i bits      (at 3840×2160, 32 px: 7 + 7 + 10)
+/// ```
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ClusterGrid {
+    pub width: u32,
+    pub height: u32,
+    /// Tile edge in pixels.
+    pub tile_size: u32,
+    /// `ceil(width / tile_size)`.
+    pub tiles_x: u32,
+    /// `ceil(height / tile_size)` — `S_y` of the slice formula.
+    pub tiles_y: u32,
+    /// Depth slices between `near` and `far`.
+    pub num_slices: u32,
+    pub bits_i: u32,
+    pub bits_j: u32,
+    pub bits_k: u32,
+    /// Near plane distance (> 0), view-space units.
+    pub near: f32,
+    pub far: f32,
+    /// `ln(1 + 2·tan(θ)/S_y)`, θ = half the vertical field of view: the log-depth of one slice.
+    pub log_growth: f32,
+    /// `1 / log_growth`.
+    pub inv_log_growth: f32,
+    /// `tan(θ)`.
+    pub tan_half_fov_y: f32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<ClusterGrid>() == 64);
+
+/// Normal-encoding precisions (values of [`OctaParams::precision`]); see [`crate::octahedral`].
+pub const PRECISION_OCT8: u32 = 0;
+pub const PRECISION_OCT12: u32 = 1;
+pub const PRECISION_OCT16: u32 = 2;
+pub const PRECISION_F32: u32 = 3;
+
+/// `octa_roundtrip` kernel: `count` normals (`[f32; 4]`, w ignored) → encoded words + decoded.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct OctaParams {
+    pub count: u32,
+    pub precision: u32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<OctaParams>() == 16);
+
+/// `cluster_keys` kernel: one key per `(px, py, view_z)` sample.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ClusterKeyParams {
+    pub grid: ClusterGrid,
+    pub count: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<ClusterKeyParams>() == 80);
+const _: () = assert!(core::mem::size_of::<ClusterKeyParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// Input sample of the `cluster_keys` kernel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct KeySample {
+    pub px: u32,
+    pub py: u32,
+    /// View-space z (negative in front of the camera).
+    pub view_z: f32,
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<KeySample>() == 16);
+
+/// `workgroup_scan` kernel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ScanParams {
+    pub count: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<ScanParams>() == 16);
+
+/// `debug_view` kernel: one RGBA8 pixel per invocation.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct DebugViewParams {
+    pub grid: ClusterGrid,
+    /// One of `debug_view::VIEW_*`.
+    pub view: u32,
+    /// One of `PRECISION_*`.
+    pub precision: u32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<DebugViewParams>() == 80);
+const _: () = assert!(core::mem::size_of::<DebugViewParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// `morton_codes` kernel: quantisers for the 30-bit (10 bits/axis) and 63-bit (21 bits/axis)
+/// codes, built on the host by `MortonQuantizer::new` (the only division happens there).
+#[repr(C)]
+#[derive(Clone, Copy)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Debug, PartialEq, Pod, Zeroable))]
+pub struct MortonParams {
+    pub q30: crate::morton::MortonQuantizer,
+    pub q63: crate::morton::MortonQuantizer,
+    pub count: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<MortonParams>() == 64);

@@ -1,0 +1,28 @@
+//! manylights GPU kernels, written once in Rust.
+//!
+//! Every kernel is a pure function (CPU-testable with `cargo test`) plus a thin `#[spirv(...)]`
+//! entry point in [`entries`] that only unpacks built-ins and buffers and calls it. rust-gpu
+//! compiles this crate to SPIR-V (`host/build.rs`); on the host it is an ordinary rlib, so the
+//! host, the tests and the benchmarks call the very same functions as CPU references.
+//!
+//! * [`layout`] — every host↔GPU struct and constant (`#[repr(C)]`, size-asserted).
+//! * [`kernels`] — typed handles naming each entry point with its push-constant type (host only).
+//! * [`octahedral`] — normal encodings (2×8, 2×12, 2×16 bit octahedral; float32).
+//! * [`cluster_key`] — tile × exponential-slice cluster keys.
+//! * [`morton`] — 30/63-bit 3D Morton codes.
+//! * [`coop`] — the cooperative-kernel traits (GPU intrinsics / CPU lock-step emulation).
+//! * [`scan`] — subgroup/workgroup prefix sums.
+//! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
+#![cfg_attr(target_arch = "spirv", no_std)]
+
+pub mod cluster_key;
+pub mod coop;
+pub mod debug_view;
+pub mod entries;
+pub mod layout;
+pub mod morton;
+pub mod octahedral;
+pub mod scan;
+
+#[cfg(not(target_arch = "spirv"))]
+pub mod kernels;

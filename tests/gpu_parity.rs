@@ -1,0 +1,75 @@
+//! GPU-vs-CPU parity of every foundation kernel, on the local Vulkan device (lavapipe in CI),
+//! with validation on. The comparison rules (bit-equal / ULP bounds / tie rule) live in
+//! `host::parity` and are shared with `manylights check`.
+mod common;
+use host::debug_frame::{self, DebugView, FrameSpec, Precision};
+use host::parity;
+
+fn check(f: impl FnOnce(&host::gpu::Gpu) -> anyhow::Result<parity::Report>) {
+    let gpu = common::gpu();
+    let report = f(&gpu).unwrap_or_else(|e| panic!("{e:#}"));
+    println!("{} [{}]", report, gpu.ctx.info.line());
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn octahedral_oct8() {
+    check(|g| parity::octahedral(g, Precision::Oct8));
+}
+
+#[test]
+fn octahedral_oct12() {
+    check(|g| parity::octahedral(g, Precision::Oct12));
+}
+
+#[test]
+fn octahedral_oct16() {
+    check(|g| parity::octahedral(g, Precision::Oct16));
+}
+
+#[test]
+fn octahedral_f32() {
+    check(|g| parity::octahedral(g, Precision::F32));
+}
+
+#[test]
+fn cluster_keys() {
+    check(parity::cluster_keys);
+}
+
+#[test]
+fn morton_codes() {
+    check(parity::morton_codes);
+}
+
+#[test]
+fn workgroup_scan_at_device_width() {
+    check(parity::workgroup_scan);
+}
+
+/// The debug frame (all kernels' functions composed) matches its CPU rendering: identical except
+/// for pixels where GPU `sqrt`/division rounding flips a silhouette or an 8-bit colour step.
+#[test]
+fn debug_frame_matches_cpu() {
+    let gpu = common::gpu();
+    for view in [DebugView::Normals, DebugView::Clusters, DebugView::Slices, DebugView::OctaError] {
+        let spec = FrameSpec {
+            width: 97,
+            height: 61,
+            tile_size: 16,
+            near: 0.1,
+            far: 500.0,
+            fov_y_degrees: 60.0,
+            view,
+            precision: Precision::Oct12,
+        };
+        let (g, _) = debug_frame::render_gpu(&gpu, &spec).unwrap();
+        let c = debug_frame::render_cpu(&spec).unwrap();
+        let channel_diff = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
+        let differing = g.iter().zip(&c).filter(|(a, b)| channel_diff(**a, **b) > 1).count();
+        let background = g.iter().filter(|&&p| p == 0xff20_1818).count();
+        assert!(background > 0 && background < g.len(), "{view:?}: frame must show both scene and background");
+        assert!(differing * 200 <= g.len(), "{view:?}: {differing} of {} pixels differ by more than 1/255", g.len());
+    }
+    common::assert_clean(&gpu);
+}
