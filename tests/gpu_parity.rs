@@ -49,27 +49,29 @@ fn workgroup_scan_at_device_width() {
 
 /// The debug frame (all kernels' functions composed) matches its CPU rendering: identical except
 /// for pixels where GPU `sqrt`/division rounding flips a silhouette or an 8-bit colour step.
+/// The octa-error view is the amplified difference of two rounding errors (a 1e-4 rad angle over
+/// its bound), so there the check is what the view is for: no pixel, on either side, shows an
+/// error above the proven bound (pure red).
 #[test]
 fn debug_frame_matches_cpu() {
     let gpu = common::gpu();
     for view in [DebugView::Normals, DebugView::Clusters, DebugView::Slices, DebugView::OctaError] {
-        let spec = FrameSpec {
-            width: 97,
-            height: 61,
-            tile_size: 16,
-            near: 0.1,
-            far: 500.0,
-            fov_y_degrees: 60.0,
-            view,
-            precision: Precision::Oct12,
-        };
-        let (g, _) = debug_frame::render_gpu(&gpu, &spec).unwrap();
-        let c = debug_frame::render_cpu(&spec).unwrap();
-        let channel_diff = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
-        let differing = g.iter().zip(&c).filter(|(a, b)| channel_diff(**a, **b) > 1).count();
-        let background = g.iter().filter(|&&p| p == 0xff20_1818).count();
-        assert!(background > 0 && background < g.len(), "{view:?}: frame must show both scene and background");
-        assert!(differing * 200 <= g.len(), "{view:?}: {differing} of {} pixels differ by more than 1/255", g.len());
+        for precision in [Precision::Oct8, Precision::Oct12, Precision::Oct16] {
+            let spec = FrameSpec { width: 97, height: 61, tile_size: 16, near: 0.1, far: 500.0, fov_y_degrees: 60.0, view, precision };
+            let (g, _) = debug_frame::render_gpu(&gpu, &spec).unwrap();
+            let c = debug_frame::render_cpu(&spec).unwrap();
+            let background = g.iter().filter(|&&p| p == 0xff20_1818).count();
+            assert!(background > 0 && background < g.len(), "{view:?}: frame must show both scene and background");
+            if view == DebugView::OctaError {
+                const RED: u32 = 0xff00_00ff;
+                assert!(!g.contains(&RED) && !c.contains(&RED), "{precision:?}: an encoding error exceeds the proven bound");
+                continue;
+            }
+            let channel_diff =
+                |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
+            let differing = g.iter().zip(&c).filter(|(a, b)| channel_diff(**a, **b) > 1).count();
+            assert!(differing * 200 <= g.len(), "{view:?}: {differing} of {} pixels differ by more than 1/255", g.len());
+        }
     }
     common::assert_clean(&gpu);
 }

@@ -154,7 +154,7 @@ pub fn workgroup_scan(gpu: &Gpu) -> Result<Report> {
     let wg = SCAN_WORKGROUP as usize;
     let width = ctx.info.subgroup_size;
     ensure!(
-        SCAN_WORKGROUP % width == 0 && (SCAN_WORKGROUP / width) as usize <= SCAN_SHARED_WORDS,
+        SCAN_WORKGROUP.is_multiple_of(width) && (SCAN_WORKGROUP / width) as usize <= SCAN_SHARED_WORDS,
         "subgroup size {width} does not divide the scan workgroup {SCAN_WORKGROUP}"
     );
     let mut cases = 0;

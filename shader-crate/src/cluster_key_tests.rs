@@ -129,7 +129,9 @@ fn invalid_grids_are_errors() {
     assert!(e(ClusterGrid::new(10, 10, 32, 0.1, 10.0, 0.0)).contains("field of view"));
     assert!(e(ClusterGrid::new(10, 10, 32, 0.1, 10.0, f32::NAN)).contains("field of view"));
     assert!(e(ClusterGrid::new(10, 10, 32, 0.1, 10.0, 4.0)).contains("field of view"));
-    // 1 px tiles at 32768² need 15 + 15 bits for (i, j): no room left for the slices.
-    assert!(e(ClusterGrid::new(32768, 32768, 1, 0.1, 1000.0, FOV)).contains("bits > 32"));
+    // 1 px tiles at 32768² need 15 + 15 bits for (i, j): no room left for 28 slices (5 bits).
+    assert!(e(ClusterGrid::new(32768, 32768, 1, 0.1, 0.1001, FOV)).contains("15+15+5 bits > 32"));
+    // … and with a deep range the slice count itself is refused first.
+    assert!(e(ClusterGrid::new(32768, 32768, 1, 0.1, 1000.0, FOV)).contains("slices"));
     assert!(e(ClusterGrid::new(1000, 1000, 1, 1e-30, 1e30, 0.001)).contains("slices"));
 }

@@ -96,6 +96,7 @@ fn cells_f32(bits: u32) -> f32 {
 
 /// (min, scale) of one axis.
 #[inline]
+#[allow(clippy::manual_range_contains)]
 fn axis(lo: f32, hi: f32, cells: f32) -> (f32, f32) {
     let min = if is_finite_bits(lo) { lo } else { 0.0 };
     if is_finite_bits(lo) && is_finite_bits(hi) {
@@ -111,8 +112,10 @@ fn axis(lo: f32, hi: f32, cells: f32) -> (f32, f32) {
     (min, 0.0)
 }
 
-/// Cell of one coordinate (see the table in the module docs).
+/// Cell of one coordinate (see the table in the module docs). `!(x >= 0.0)` is deliberate: it is
+/// also true for NaN.
 #[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn quantize_axis(p: f32, min: f32, scale: f32, cells: f32, max_cell: u32) -> u32 {
     let b = p.to_bits() & ABS_MASK;
     if b > INF_BITS || !(scale > 0.0) {

@@ -69,7 +69,7 @@
 //! 3. Flush-to-zero: any component with `|c| < f32::MIN_POSITIVE` (zero or denormal; tested as
 //!    "exponent field is 0", equivalent to `c.abs() < f32::MIN_POSITIVE`) becomes `+0.0`, so the CPU
 //!    and a denormal-flushing GPU agree. Consequently denormal components are ignored by design:
-//!    all-denormal → `+Z`, and e.g. `(1e-38, 1e-40, 0)` encodes as `+X`.
+//!    all-denormal → `+Z`, and e.g. `(2e-38, 1e-40, 0)` encodes as `+X`.
 //! 4. All zero → `+Z`.
 //! 5. Exact power-of-two rescale: with `m = max |c|` and `e` its unbiased exponent (from the bits),
 //!    every component is multiplied by `2^-e` (in two steps `2^k1 · 2^k2`, each a normal float),
@@ -107,8 +107,9 @@
 //! Let `a` be the exact square point of the input direction and `b` the point that decoding uses.
 //! Rounding to the nearest multiple of `1/M` (the grid includes ±1) moves each coordinate by at
 //! most `h = 1/(2M)`; float error adds at most `ε = 1e-6` per coordinate (encode: ≤ 9u from
-//! the (GPU) division, products and fold; rounding of `t`: ≤ 2^-10/M; decode `q·(1/M)`: ≤ 2u;
-//! total < 7e-7). So `|a - b|∞ <= δ = h + ε`.
+//! the L1 sum, the (GPU, 2.5 ULP) division, the product and the fold; rounding of `t = |c|·M`:
+//! ≤ u·M in `t`, i.e. ≤ u; decode `q·(1/M)`: ≤ 2u; total 12u < 7.2e-7). So
+//! `|a - b|∞ <= δ = h + ε`.
 //!
 //! The decode map `F(u, v) = p` is continuous and, on each of its 8 triangles (4 quadrants ×
 //! diamond/corner), linear: `dp = (du, dv, -su·du - sv·dv)` inside the diamond and a signed
@@ -267,19 +268,10 @@ const fn snorm_inv_max(bits: u32) -> f32 {
 /// [`oct_bits`]), and `2^-23` for `bits > 16` (`F32`). Derivation in the module docs.
 pub const fn max_angular_error_bound(bits: u32) -> f32 {
     if bits > 16 {
-        return 1.1920929e-7; // 2^-23 >= 2^-24·(1+1e-7) + 2^-125
+        return f32::EPSILON; // 2^-23 >= 2^-24·(1+1e-7) + 2^-125
     }
-    let h = 0.5 / snorm_max(bits);
+    let h = 0.5 * snorm_inv_max(bits); // 1/(2M), division-free (same value on CPU and GPU)
     3.0 * core::f32::consts::SQRT_2 * (h + 1.0e-6) + 1.0e-6
-}
-
-#[inline]
-fn sign_or_pos(c: f32) -> f32 {
-    if c >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    }
 }
 
 /// `+0.0` if `c` is zero or denormal (exponent field 0), else `c`. Works on the bit pattern, so it
@@ -337,7 +329,7 @@ pub fn sanitize(n: [f32; 3]) -> [f32; 3] {
     // m = 1.f · 2^e with e = (m >> 23) - 127 in [-126, 127]; scale by 2^k, k = -e in [-127, 126],
     // split as k1 + k2 (same signs, each in [-64, 63]) so both factors are normal floats.
     let k = 127 - (m >> 23) as i32;
-    let k1 = k / 2;
+    let k1 = k >> 1; // floor(k/2): k1 and k - k1 have the sign of k (or are 0)
     let s1 = pow2(k1);
     let s2 = pow2(k - k1);
     [
@@ -371,6 +363,13 @@ pub fn oct_project(n: [f32; 3]) -> [f32; 2] {
     let v = sanitize(n);
     let l1 = v[0].abs() + v[1].abs() + v[2].abs(); // in [1, 6): adds only, exact on GPU too
     let inv = 1.0 / l1; // the single inexact GPU operation of the encode path
+    project_with_inv(v, inv)
+}
+
+/// The rest of [`oct_project`] for a sanitised `v` and `inv ≈ 1/|v|₁` (split out so the tests can
+/// emulate a GPU division that is off by a few ULP).
+#[inline]
+fn project_with_inv(v: [f32; 3], inv: f32) -> [f32; 2] {
     let px = v[0] * inv;
     let py = v[1] * inv;
     // Decide and sign with the sanitised values (exact), not with px/py/pz (may underflow).

@@ -333,3 +333,31 @@ fn error_study() {
         assert!(max_len_err[k] <= 5.0 * U, "{p:?}: length error {}", max_len_err[k]);
     }
 }
+
+#[test]
+fn inexact_gpu_division_moves_codes_by_at_most_one() {
+    // Emulate a GPU whose `1.0 / l1` is off by up to ±5 ULP (the spec allows 2.5): codes differ
+    // from the CPU's by at most one step, and the decoded direction stays within the bound.
+    const N: u32 = 1 << 16;
+    let mut changed = [0u32; 3];
+    for i in 0..N {
+        let n = fibonacci_sphere(i, N);
+        let v = sanitize(n);
+        let inv = 1.0 / (v[0].abs() + v[1].abs() + v[2].abs());
+        for (k, b) in [8u32, 12, 16].into_iter().enumerate() {
+            let reference = encode_oct(n, b);
+            let (rx, ry) = codes(reference, b);
+            for d in [-5i32, -2, -1, 1, 2, 5] {
+                let inv_gpu = f32::from_bits((inv.to_bits() as i32 + d) as u32);
+                let uv = project_with_inv(v, inv_gpu);
+                let (qx, qy) = (snorm_encode(uv[0], b), snorm_encode(uv[1], b));
+                assert!((qx - rx).abs() <= 1 && (qy - ry).abs() <= 1, "{n:?} bits {b} ulp {d}");
+                changed[k] += ((qx, qy) != (rx, ry)) as u32;
+                let w = (qx as u32 & ((1 << b) - 1)) | ((qy as u32 & ((1 << b) - 1)) << b);
+                let a = angle(to64(n), to64(decode_oct(w, b)));
+                assert!(a <= max_angular_error_bound(b) as f64);
+            }
+        }
+    }
+    println!("\n±1..5-ULP division: codes changed in {changed:?} of {} encodes (8/12/16 bits)", 6 * N);
+}

@@ -144,8 +144,11 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     Ok((info, rank, why))
 }
 
-/// Every physical device with its info, type rank, and why it is unusable (None: usable).
-pub fn list(instance: &ash::Instance) -> VkResult<Vec<(vk::PhysicalDevice, DeviceInfo, u32, Option<String>)>> {
+/// A physical device, its info, its type rank (0 = discrete) and why it is unusable (None: usable).
+pub type Candidate = (vk::PhysicalDevice, DeviceInfo, u32, Option<String>);
+
+/// Every physical device, inspected.
+pub fn list(instance: &ash::Instance) -> VkResult<Vec<Candidate>> {
     let devices = unsafe { instance.enumerate_physical_devices() }.call("vkEnumeratePhysicalDevices")?;
     devices
         .into_iter()

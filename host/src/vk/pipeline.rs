@@ -83,7 +83,7 @@ impl<P: Pod> ComputePipeline<P> {
             .name(&entry);
         let full = kernel.cooperative
             && ctx.info.full_subgroups
-            && kernel.workgroup_size[0] % ctx.info.max_subgroup_size == 0;
+            && kernel.workgroup_size[0].is_multiple_of(ctx.info.max_subgroup_size);
         if full {
             stage = stage.flags(vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS);
         }

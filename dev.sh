@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# manylights developer entry point: installs what is missing, then builds and runs.
+#
+#   ./dev.sh render [manylights render flags]   build (release) and render a frame
+#   ./dev.sh test                               the whole test suite (what CI runs)
+#   ./dev.sh <any manylights subcommand>        e.g. ./dev.sh check, ./dev.sh devices
+#
+# Needs: rustup (stable toolchain). Installs through apt when it can (root or passwordless sudo):
+# the Vulkan loader, Mesa's CPU driver lavapipe, the Khronos validation layers, spirv-tools.
+# The first build also installs the pinned nightly rust-gpu needs and compiles its backend once
+# (about 10 minutes on 2 cores; cached in ~/.cache/rust-gpu).
+set -euo pipefail
+cd "$(dirname "$0")"
+
+PACKAGES=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers spirv-tools vulkan-tools)
+
+die() { echo "dev.sh: $*" >&2; exit 1; }
+
+ensure_rust() {
+    if ! command -v cargo >/dev/null 2>&1; then
+        [ -x "$HOME/.cargo/bin/cargo" ] && export PATH="$HOME/.cargo/bin:$PATH"
+    fi
+    command -v cargo >/dev/null 2>&1 || die "cargo not found: install rustup (https://rustup.rs), then run this again"
+    command -v rustup >/dev/null 2>&1 || die "rustup not found: rust-gpu installs its pinned nightly through rustup (https://rustup.rs)"
+}
+
+ensure_packages() {
+    command -v dpkg-query >/dev/null 2>&1 || {
+        echo "dev.sh: not a Debian/Ubuntu system: make sure a Vulkan loader, a Vulkan driver (e.g. Mesa lavapipe), the Khronos validation layer and spirv-tools are installed" >&2
+        return 0
+    }
+    local missing=()
+    for p in "${PACKAGES[@]}"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+            sudo="sudo"
+        else
+            die "missing packages: ${missing[*]}. Install them with: sudo apt-get install ${missing[*]}"
+        fi
+    fi
+    echo "dev.sh: installing ${missing[*]}" >&2
+    $sudo apt-get update -qq >&2 || die "apt-get update failed; install by hand: ${missing[*]}"
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2 \
+        || die "apt-get install failed; install by hand: ${missing[*]}"
+}
+
+first_build_notice() {
+    [ -f "$HOME/.cache/rust-gpu/codegen/0_11_0/librustc_codegen_spirv.so" ] \
+        || echo "dev.sh: first build: installing the pinned nightly and compiling the rust-gpu backend (~10 min, once)" >&2
+}
+
+cmd="${1:-}"
+[ -n "$cmd" ] || die "usage: ./dev.sh render [flags] | test | <manylights subcommand>"
+ensure_rust
+ensure_packages
+first_build_notice
+case "$cmd" in
+    test)
+        shift
+        # Every GPU test opens the Khronos validation layer with synchronization validation and
+        # fails on any message. Clippy must be clean too.
+        cargo test --workspace "$@"
+        if cargo clippy --version >/dev/null 2>&1 || rustup component add clippy >/dev/null 2>&1; then
+            cargo clippy --workspace --all-targets -- -D warnings
+        else
+            echo "dev.sh: clippy unavailable, lint skipped" >&2
+        fi
+        ;;
+    *)
+        cargo build --release -p host
+        exec ./target/release/manylights "$@"
+        ;;
+esac
