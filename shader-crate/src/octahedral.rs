@@ -146,13 +146,13 @@ use spirv_std::num_traits::Float;
 pub type EncodedNormal = [u32; 3];
 
 /// `Precision::Oct8 as u32`.
-pub const OCT8: u32 = 0;
+pub const OCT8: u32 = crate::layout::PRECISION_OCT8;
 /// `Precision::Oct12 as u32`.
-pub const OCT12: u32 = 1;
+pub const OCT12: u32 = crate::layout::PRECISION_OCT12;
 /// `Precision::Oct16 as u32`.
-pub const OCT16: u32 = 2;
+pub const OCT16: u32 = crate::layout::PRECISION_OCT16;
 /// `Precision::F32 as u32`.
-pub const F32: u32 = 3;
+pub const F32: u32 = crate::layout::PRECISION_F32;
 
 /// The default direction for NaN or all-zero input.
 pub const DEFAULT_DIRECTION: [f32; 3] = [0.0, 0.0, 1.0];

@@ -19,6 +19,8 @@ pub enum VkError {
     Alloc { name: String, bytes: u64, source: gpu_allocator::AllocationError },
     #[error("buffer {name:?} holds {have} bytes, {need} requested")]
     BufferTooSmall { name: String, have: u64, need: u64 },
+    #[error("image {name:?}: {what}")]
+    InvalidImage { name: String, what: String },
     #[error("kernel {entry:?}: {what}")]
     Kernel { entry: &'static str, what: String },
 }

@@ -5,12 +5,14 @@
 //! | `instance.rs` | instance, validation layer + synchronization validation, message capture |
 //! | `device.rs` | physical-device selection (`--device`), capabilities, logical device |
 //! | `context.rs` | the shared context (device, queues, allocator, command submission) |
+//! | `image.rs` | 2D images with views, layout transitions |
 //! | `memory.rs` | buffers (`gpu-allocator`), upload/read-back, barriers |
 //! | `pipeline.rs` | shader modules, typed compute pipelines, the dispatch recorder |
 //! | `profiler.rs` | GPU timestamps per pass |
 pub mod context;
 pub mod device;
 pub mod error;
+pub mod image;
 pub mod instance;
 pub mod memory;
 pub mod pipeline;
@@ -19,6 +21,7 @@ pub mod profiler;
 pub use context::{Context, ContextOptions};
 pub use device::DeviceInfo;
 pub use error::{VkError, VkResult};
+pub use image::Image;
 pub use memory::{Buffer, MemoryLocation};
 pub use pipeline::{ComputePipeline, Recorder, ShaderModule};
 pub use profiler::{PassTiming, Profiler};
