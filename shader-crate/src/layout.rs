@@ -131,3 +131,42 @@ pub struct MortonParams {
     pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<MortonParams>() == 64);
+
+// ─── Clustered shading (issue 3) ─────────────────────────────────────────────────────────────
+
+/// Keys per page of the virtual page table (Karas: 512-entry pages). `page = key >> PAGE_SHIFT`,
+/// `slot = key & (PAGE_SIZE − 1)`.
+pub const PAGE_SHIFT: u32 = 9;
+pub const PAGE_SIZE: u32 = 1 << PAGE_SHIFT;
+
+/// Scene effect flags (`FrameParams::effects`): a scene without one runs no shader path for it.
+pub const EFFECT_SPECULAR: u32 = 1;
+pub const EFFECT_TEXTURES: u32 = 2;
+pub const EFFECT_ALPHA_TEST: u32 = 4;
+
+/// A point light with a finite range. In GPU buffers `position` is in view space (the host
+/// transforms lights each frame); in scenes it is in world space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct PointLight {
+    pub position: [f32; 3],
+    /// Range: the light contributes exactly 0 at distance ≥ radius.
+    pub radius: f32,
+    /// Linear RGB.
+    pub colour: [f32; 3],
+    pub intensity: f32,
+}
+const _: () = assert!(core::mem::size_of::<PointLight>() == 32);
+
+/// View-space axis-aligned box of one cluster.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ClusterAabb {
+    pub min: [f32; 3],
+    pub _pad0: f32,
+    pub max: [f32; 3],
+    pub _pad1: f32,
+}
+const _: () = assert!(core::mem::size_of::<ClusterAabb>() == 32);
