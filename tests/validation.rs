@@ -20,12 +20,35 @@ fn invalid_api_use_is_reported() {
 #[test]
 fn synchronization_hazard_is_reported() {
     let gpu = common::gpu();
+    let src = Buffer::from_slice(&gpu.ctx, "source", &[7u32; 64]).unwrap();
+    let dst = Buffer::storage(&gpu.ctx, "destination", 256).unwrap();
+    // Two copies into the same bytes with no barrier between them: WRITE_AFTER_WRITE.
+    gpu.ctx
+        .submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy::default().size(256)];
+            unsafe {
+                gpu.ctx.device.cmd_copy_buffer(cmd, src.raw, dst.raw, &region);
+                gpu.ctx.device.cmd_copy_buffer(cmd, src.raw, dst.raw, &region);
+            }
+            Ok(())
+        })
+        .unwrap();
+    let msgs = gpu.ctx.take_validation_messages();
+    assert!(msgs.iter().any(|m| m.contains("SYNC-HAZARD")), "expected a SYNC-HAZARD report, got {msgs:?}");
+}
+
+/// Known gap, kept visible: the Debian layer (1.3.239) does not report a hazard between two
+/// dispatches whose buffers are bound with push descriptors. Our `Recorder` therefore serialises
+/// every dispatch with a barrier by construction. When this starts failing, the layer checks
+/// dispatch hazards too: delete the test.
+#[test]
+fn push_descriptor_dispatch_hazard_is_not_reported_by_this_layer() {
+    let gpu = common::gpu();
     let k = &gpu.kernels.workgroup_scan;
     let input = Buffer::from_slice(&gpu.ctx, "input", &[1u32; 256]).unwrap();
     let out = Buffer::storage(&gpu.ctx, "output", 1024).unwrap();
     let totals = Buffer::storage(&gpu.ctx, "totals", 16).unwrap();
     let params = ScanParams { count: 256, _pad: [0; 3] };
-    // Two dispatches writing the same buffers with no barrier between them: WRITE_AFTER_WRITE.
     gpu.ctx
         .submit_and_wait(|cmd| {
             let d = &gpu.ctx.device;
@@ -54,7 +77,7 @@ fn synchronization_hazard_is_reported() {
         })
         .unwrap();
     let msgs = gpu.ctx.take_validation_messages();
-    assert!(msgs.iter().any(|m| m.contains("SYNC-HAZARD")), "expected a SYNC-HAZARD report, got {msgs:?}");
+    assert!(!msgs.iter().any(|m| m.contains("SYNC-HAZARD")), "the layer now reports dispatch hazards: {msgs:?}");
 }
 
 #[test]
