@@ -136,7 +136,7 @@ pub fn octahedral(gpu: &Gpu, precision: CliPrecision) -> Result<Report> {
         let d = |s: f64| (0..3).map(|c| (a[c] / na + s * b[c] / nb).powi(2)).sum::<f64>().sqrt();
         let direction = 2.0 * d(-1.0).atan2(d(1.0));
         max_direction = max_direction.max(direction);
-        if !finite || worst > DECODE_ULPS || !(direction <= DIRECTION_RAD) {
+        if !finite || worst > DECODE_ULPS || direction.is_nan() || direction > DIRECTION_RAD {
             bad_decode.push((i, *input, gpu_dec, cpu_dec, worst));
         }
     }
