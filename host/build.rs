@@ -4,10 +4,10 @@
 //! rustup when it is missing and builds the `rustc_codegen_spirv` backend once into
 //! `~/.cache/rust-gpu` (≈ 10 min cold on 2 cores; seconds afterwards). The host itself stays on
 //! stable. The produced module's path reaches the host as `MANYLIGHTS_COMPUTE_SPV`
-//! (`include_bytes!`), so the binary is self-contained and can be carried to another machine.
+//! (`include_bytes!`; `MANYLIGHTS_GRAPHICS_SPV` for the raster module), so the binary is self-contained and can be carried to another machine.
 //!
-//! One module for now: compute kernels, with the subgroup capabilities. Graphics shaders will be
-//! a second module built without them (lavapipe rejects GroupNonUniform* in vertex stages).
+//! Two modules: compute kernels (feature `compute`, with the subgroup capabilities) and raster
+//! shaders (feature `graphics`, without them: lavapipe rejects GroupNonUniform* in vertex stages).
 use cargo_gpu_install::install::Install;
 use cargo_gpu_install::spirv_builder::{Capability, ShaderPanicStrategy, SpirvMetadata};
 
@@ -16,19 +16,32 @@ fn main() -> anyhow::Result<()> {
     let backend = Install::from_shader_crate(crate_path.clone())
         .within_build_script()
         .run()?;
-    let mut builder = backend.to_spirv_builder(crate_path, "spirv-unknown-vulkan1.3");
-    builder.build_script.defaults = true;
-    builder.shader_panic_strategy = ShaderPanicStrategy::SilentExit;
-    builder.spirv_metadata = SpirvMetadata::NameVariables;
-    builder.capabilities.extend([
+    // Module 1: compute kernels, with the subgroup capabilities.
+    let mut compute = backend.to_spirv_builder(&crate_path, "spirv-unknown-vulkan1.3");
+    configure(&mut compute, "compute");
+    compute.capabilities.extend([
         Capability::GroupNonUniform,
         Capability::GroupNonUniformBallot,
         Capability::GroupNonUniformShuffle,
         Capability::VulkanMemoryModelDeviceScope,
         Capability::Int64,
     ]);
-    let result = builder.build()?;
-    let spv = result.module.unwrap_single();
+    let spv = compute.build()?.module.unwrap_single().to_path_buf();
     println!("cargo::rustc-env=MANYLIGHTS_COMPUTE_SPV={}", spv.display());
+    // Module 2: raster shaders, without them (separate target dir so the two feature sets do
+    // not keep invalidating each other's build).
+    let mut graphics = backend.to_spirv_builder(&crate_path, "spirv-unknown-vulkan1.3");
+    configure(&mut graphics, "graphics");
+    graphics.target_dir_path = Some("spirv-builder-graphics".into());
+    let spv = graphics.build()?.module.unwrap_single().to_path_buf();
+    println!("cargo::rustc-env=MANYLIGHTS_GRAPHICS_SPV={}", spv.display());
     Ok(())
+}
+
+fn configure(b: &mut cargo_gpu_install::spirv_builder::SpirvBuilder, feature: &str) {
+    b.build_script.defaults = true;
+    b.shader_panic_strategy = ShaderPanicStrategy::SilentExit;
+    b.spirv_metadata = SpirvMetadata::NameVariables;
+    b.shader_crate_features.default_features = false;
+    b.shader_crate_features.features = vec![feature.to_owned()];
 }

@@ -20,7 +20,7 @@ fn tmp(name: &str) -> std::path::PathBuf {
 #[test]
 fn render_writes_a_png() {
     let out = tmp("clusters.png");
-    let (ok, _, err) = manylights(&["render", "--view", "clusters", "--width", "160", "--height", "90", "--out", out.to_str().unwrap()]);
+    let (ok, _, err) = manylights(&["debug-frame", "--view", "clusters", "--width", "160", "--height", "90", "--out", out.to_str().unwrap()]);
     assert!(ok, "render failed:\n{err}");
     assert!(err.contains("device: "), "stderr names the device:\n{err}");
     let img = image::open(&out).expect("a readable PNG").to_rgba8();
@@ -34,12 +34,12 @@ fn bad_input_is_a_one_line_error() {
     let out = tmp("x.png");
     let o = out.to_str().unwrap();
     let cases: &[(&[&str], &str)] = &[
-        (&["render", "--width", "0", "--out", o], "resolution 0x"),
-        (&["render", "--height", "0", "--out", o], "resolution"),
-        (&["render", "--width", "100000", "--out", o], "resolution"),
-        (&["render", "--tile-size", "0", "--out", o], "tile size 0"),
-        (&["render", "--out", "/nonexistent-dir/x.png"], "/nonexistent-dir/x.png"),
-        (&["--device", "no-such-gpu-xyz", "render", "--out", o], "no Vulkan device matches"),
+        (&["debug-frame", "--width", "0", "--out", o], "resolution 0x"),
+        (&["debug-frame", "--height", "0", "--out", o], "resolution"),
+        (&["debug-frame", "--width", "100000", "--out", o], "resolution"),
+        (&["debug-frame", "--tile-size", "0", "--out", o], "tile size 0"),
+        (&["debug-frame", "--out", "/nonexistent-dir/x.png"], "/nonexistent-dir/x.png"),
+        (&["--device", "no-such-gpu-xyz", "debug-frame", "--out", o], "no Vulkan device matches"),
     ];
     for (args, needle) in cases {
         let (ok, _, err) = manylights(args);

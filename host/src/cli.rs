@@ -27,8 +27,10 @@ pub struct DeviceArgs {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Render a frame and write it as PNG (for now: debug views of the analytic test scene).
-    Render(RenderArgs),
+    /// Render a scene with a lighting technique; write the frame as PNG (and statistics as JSON).
+    Render(crate::render_cmd::RenderArgs),
+    /// Render a debug frame of the analytic test scene (normal encoding, cluster keys, slices).
+    DebugFrame(DebugFrameArgs),
     /// Run every kernel on the GPU and compare with the CPU reference (exit 1 on a mismatch).
     Check,
     /// List Vulkan devices and whether manylights can use them.
@@ -36,7 +38,7 @@ pub enum Command {
 }
 
 #[derive(Args, Debug)]
-pub struct RenderArgs {
+pub struct DebugFrameArgs {
     /// What to show.
     #[arg(long, value_enum, default_value_t = DebugView::Clusters)]
     pub view: DebugView,
@@ -77,6 +79,11 @@ fn finish(gpu: &Gpu) -> Result<()> {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(a) => {
+            let gpu = open(&cli.device)?;
+            crate::render_cmd::run(&gpu, &a)?;
+            finish(&gpu)
+        }
+        Command::DebugFrame(a) => {
             let gpu = open(&cli.device)?;
             let spec = FrameSpec {
                 width: a.width,

@@ -14,6 +14,17 @@ pub struct Kernels {
     pub morton_codes: ComputePipeline<MortonParams>,
     pub workgroup_scan: ComputePipeline<ScanParams>,
     pub debug_view: ComputePipeline<DebugViewParams>,
+    pub pixel_keys: ComputePipeline<FrameParams>,
+    pub mark_pages: ComputePipeline<FrameParams>,
+    pub record_pages: ComputePipeline<FrameParams>,
+    pub store_slots: ComputePipeline<FrameParams>,
+    pub compact_clusters: ComputePipeline<FrameParams>,
+    pub cluster_light_counts: ComputePipeline<FrameParams>,
+    pub cluster_light_fill: ComputePipeline<FrameParams>,
+    pub shade_clustered: ComputePipeline<FrameParams>,
+    pub shade_deferred: ComputePipeline<FrameParams>,
+    pub scan_add_offsets: ComputePipeline<ScanFixParams>,
+    pub scan_store_total: ComputePipeline<ScanFixParams>,
 }
 
 impl Kernels {
@@ -25,20 +36,40 @@ impl Kernels {
             morton_codes: ComputePipeline::new(ctx, &module, kernels::MORTON_CODES)?,
             workgroup_scan: ComputePipeline::new(ctx, &module, kernels::WORKGROUP_SCAN)?,
             debug_view: ComputePipeline::new(ctx, &module, kernels::DEBUG_VIEW)?,
+            pixel_keys: ComputePipeline::new(ctx, &module, kernels::PIXEL_KEYS)?,
+            mark_pages: ComputePipeline::new(ctx, &module, kernels::MARK_PAGES)?,
+            record_pages: ComputePipeline::new(ctx, &module, kernels::RECORD_PAGES)?,
+            store_slots: ComputePipeline::new(ctx, &module, kernels::STORE_SLOTS)?,
+            compact_clusters: ComputePipeline::new(ctx, &module, kernels::COMPACT_CLUSTERS)?,
+            cluster_light_counts: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS)?,
+            cluster_light_fill: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL)?,
+            shade_clustered: ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED)?,
+            shade_deferred: ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED)?,
+            scan_add_offsets: ComputePipeline::new(ctx, &module, kernels::SCAN_ADD_OFFSETS)?,
+            scan_store_total: ComputePipeline::new(ctx, &module, kernels::SCAN_STORE_TOTAL)?,
         })
     }
 }
 
 pub struct Gpu {
     pub kernels: Kernels,
+    /// The G-buffer raster pipeline (graphics module).
+    pub gbuffer: crate::vk::GraphicsPipeline,
     pub ctx: Context,
 }
 
 impl Gpu {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
         let ctx = Context::new(opts)?;
-        let kernels = Kernels::new(&ctx)?;
-        Ok(Self { kernels, ctx })
+        let made = Kernels::new(&ctx).and_then(|k| Ok((k, crate::render::gbuffer::pipeline(&ctx)?)));
+        match made {
+            Ok((kernels, gbuffer)) => Ok(Self { kernels, gbuffer, ctx }),
+            // Name what the validation layer saw, not just the failed call.
+            Err(e) => match ctx.take_validation_messages() {
+                m if m.is_empty() => Err(e),
+                m => Err(crate::vk::VkError::Validation { during: e.to_string(), messages: m.join("\n") }),
+            },
+        }
     }
 
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.

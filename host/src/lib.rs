@@ -4,4 +4,7 @@ pub mod cli;
 pub mod debug_frame;
 pub mod gpu;
 pub mod parity;
+pub mod render;
+pub mod render_cmd;
+pub mod scene;
 pub mod vk;

@@ -67,12 +67,13 @@ pub fn morton_codes(
 }
 
 /// Workgroup exclusive scan ([`scan::workgroup_exclusive_scan`]); also writes each workgroup's
-/// total. Cooperative: every invocation takes part, out-of-range ones with value 0.
+/// total. Cooperative: every invocation takes part, out-of-range ones with value 0. Workgroups
+/// whose whole range lies past `count` (the tail of a 2D-folded dispatch) write a zero total.
 #[spirv(compute(threads(256)))]
 #[allow(clippy::too_many_arguments)]
 pub fn workgroup_scan(
-    #[spirv(global_invocation_id)] gid: UVec3,
     #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local_index: u32,
     #[spirv(subgroup_size)] subgroup_size: u32,
     #[spirv(subgroup_local_invocation_id)] lane: u32,
@@ -85,14 +86,16 @@ pub fn workgroup_scan(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] totals: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let i = gid.x as usize;
-    let v = if gid.x < p.count { input[i] } else { 0 };
+    // Large inputs fold into 2D dispatches: workgroup `wg.y · num_wg.x + wg.x`.
+    let group = wg.y * nwg.x + wg.x;
+    let gi = group * scan::SCAN_WORKGROUP + local_index;
+    let v = if gi < p.count { input[gi as usize] } else { 0 };
     let (prefix, total) = scan::workgroup_exclusive_scan(&c, shared, v);
-    if gid.x < p.count {
-        output[i] = prefix;
+    if gi < p.count {
+        output[gi as usize] = prefix;
     }
     if local_index == 0 {
-        totals[wg.x as usize] = total;
+        totals[group as usize] = total;
     }
 }
 

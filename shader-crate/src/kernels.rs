@@ -41,3 +41,19 @@ pub const CLUSTER_KEYS: Kernel<ClusterKeyParams> = Kernel::new("entries::cluster
 pub const MORTON_CODES: Kernel<MortonParams> = Kernel::new("entries::morton_codes", 3, [64, 1, 1], false);
 pub const WORKGROUP_SCAN: Kernel<ScanParams> = Kernel::new("entries::workgroup_scan", 3, [crate::scan::SCAN_WORKGROUP, 1, 1], true);
 pub const DEBUG_VIEW: Kernel<DebugViewParams> = Kernel::new("entries::debug_view", 2, [8, 8, 1], false);
+
+// Clustered-deferred chain (`clustered.rs`). Linear kernels: 256 invocations, 2D-folded dispatch.
+const fn linear<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
+    Kernel::new(entry, storage_buffers, [256, 1, 1], false)
+}
+pub const PIXEL_KEYS: Kernel<FrameParams> = linear("clustered::pixel_keys", 3);
+pub const MARK_PAGES: Kernel<FrameParams> = linear("clustered::mark_pages", 2);
+pub const RECORD_PAGES: Kernel<FrameParams> = linear("clustered::record_pages", 3);
+pub const STORE_SLOTS: Kernel<FrameParams> = linear("clustered::store_slots", 3);
+pub const COMPACT_CLUSTERS: Kernel<FrameParams> = linear("clustered::compact_clusters", 4);
+pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster_light_counts", 5);
+pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
+pub const SHADE_CLUSTERED: Kernel<FrameParams> = linear("clustered::shade_clustered", 13);
+pub const SHADE_DEFERRED: Kernel<FrameParams> = linear("clustered::shade_deferred", 7);
+pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("clustered::scan_add_offsets", 2);
+pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("clustered::scan_store_total", 2, [1, 1, 1], false);

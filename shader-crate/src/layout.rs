@@ -170,3 +170,97 @@ pub struct ClusterAabb {
     pub _pad1: f32,
 }
 const _: () = assert!(core::mem::size_of::<ClusterAabb>() == 32);
+
+/// Camera of the raster passes (storage buffer, binding 3 of the G-buffer pass). Column-major
+/// matrices (glam `Mat4::to_cols_array_2d`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct RasterCamera {
+    /// World → view.
+    pub view: [[f32; 4]; 4],
+    /// View → clip: reversed-Z, infinite far, y flipped for Vulkan (`clip = (f/a·x, −f·y, near, −z)`).
+    pub proj: [[f32; 4]; 4],
+}
+const _: () = assert!(core::mem::size_of::<RasterCamera>() == 128);
+
+/// Per-draw push constants of the G-buffer pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct DrawParams {
+    /// Linear albedo of the material (multiplied with its texture when textured).
+    pub albedo: [f32; 3],
+    /// Material index (written to the G-buffer, ≤ [`MAX_MATERIALS`] − 1).
+    pub material: u32,
+    /// `PRECISION_OCT8/12/16`: encoding of the normal target.
+    pub normal_precision: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<DrawParams>() == 32);
+
+/// Materials addressable by the G-buffer's 8-bit material index.
+pub const MAX_MATERIALS: u32 = 256;
+
+/// Shading parameters of one material (storage buffer indexed by the G-buffer material index).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct MaterialGpu {
+    pub specular: f32,
+    pub roughness: f32,
+    pub _pad: [f32; 2],
+}
+const _: () = assert!(core::mem::size_of::<MaterialGpu>() == 16);
+
+/// Push constants of the clustered / deferred compute chain.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct FrameParams {
+    pub grid: ClusterGrid,
+    /// Elements of the kernel's linear domain (pixels, pages, slots or clusters).
+    pub count: u32,
+    pub num_lights: u32,
+    /// Capacity of the light-index list (entries); fill never writes beyond it.
+    pub light_capacity: u32,
+    /// `EFFECT_*` bits of the scene.
+    pub effects: u32,
+    /// `PRECISION_OCT*` of the G-buffer normals.
+    pub normal_precision: u32,
+    /// `VIEW_*` of `shading`: shaded image or lights-per-pixel heatmap.
+    pub view: u32,
+    pub exposure: f32,
+    /// Heatmap: count mapped to the top of the ramp.
+    pub heat_max: u32,
+}
+const _: () = assert!(core::mem::size_of::<FrameParams>() == 96);
+const _: () = assert!(core::mem::size_of::<FrameParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// `FrameParams::view`: the shaded image, or lights evaluated per pixel as a heat ramp.
+pub const VIEW_SHADED: u32 = 0;
+pub const VIEW_HEATMAP: u32 = 1;
+/// Cluster keys hashed to colours.
+pub const VIEW_CLUSTERS: u32 = 2;
+/// Decoded G-buffer normals, `0.5·n + 0.5`.
+pub const VIEW_NORMALS: u32 = 3;
+/// Depth slice `k / S` on a colour ramp.
+pub const VIEW_DEPTH: u32 = 4;
+
+/// Slots of the `counters` buffer of the clustered chain.
+pub const COUNTER_UNIQUE_CLUSTERS: u32 = 0;
+pub const COUNTER_LIGHT_REFS: u32 = 1;
+pub const COUNTER_PAGES: u32 = 2;
+pub const COUNTERS: u32 = 4;
+
+/// `add_offsets` / `store_total` kernels of the device-wide scan.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ScanFixParams {
+    pub count: u32,
+    /// `store_total`: destination slot in the counters buffer.
+    pub slot: u32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);

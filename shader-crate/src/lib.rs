@@ -12,19 +12,29 @@
 //! * [`morton`] — 30/63-bit 3D Morton codes.
 //! * [`coop`] — the cooperative-kernel traits (GPU intrinsics / CPU lock-step emulation).
 //! * [`scan`] — subgroup/workgroup prefix sums.
+//! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 #![cfg_attr(target_arch = "spirv", no_std)]
 // NaN-aware comparisons are deliberate: `!(x > a)` is true for NaN, which is how every kernel maps
 // bad input to a defined result; `clamp`/`contains` would change that (and `f32::clamp` asserts).
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_clamp, clippy::manual_range_contains)]
 
+pub mod cluster_bounds;
 pub mod cluster_key;
+#[cfg(feature = "compute")]
+pub mod clustered;
 pub mod coop;
 pub mod debug_view;
+#[cfg(feature = "compute")]
 pub mod entries;
 pub mod layout;
+pub mod lighting;
 pub mod morton;
 pub mod octahedral;
+pub mod page_table;
+#[cfg(feature = "graphics")]
+pub mod raster;
+pub mod reconstruct;
 pub mod scan;
 
 #[cfg(not(target_arch = "spirv"))]

@@ -207,7 +207,8 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
         .subgroup_size_control(true)
         .compute_full_subgroups(info.full_subgroups)
-        .synchronization2(true);
+        .synchronization2(true)
+        .dynamic_rendering(true);
     let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
     let exts = [khr::push_descriptor::NAME.as_ptr()];

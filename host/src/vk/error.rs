@@ -19,6 +19,10 @@ pub enum VkError {
     Alloc { name: String, bytes: u64, source: gpu_allocator::AllocationError },
     #[error("buffer {name:?} holds {have} bytes, {need} requested")]
     BufferTooSmall { name: String, have: u64, need: u64 },
+    #[error("{what} needs {bytes} bytes in one buffer; this device addresses at most {max} per binding (use a smaller resolution, fewer lights or larger tiles)")]
+    TooLarge { what: String, bytes: u64, max: u64 },
+    #[error("{during}; the validation layer reported:\n{messages}")]
+    Validation { during: String, messages: String },
     #[error("image {name:?}: {what}")]
     InvalidImage { name: String, what: String },
     #[error("kernel {entry:?}: {what}")]

@@ -153,6 +153,16 @@ impl Buffer {
     }
 }
 
+/// Fails with a clear error when `bytes` exceed what one storage-buffer binding can address on
+/// this device (`maxStorageBufferRange`: 128 MiB on lavapipe).
+pub fn check_range(ctx: &Context, what: &str, bytes: u64) -> VkResult<()> {
+    let max = ctx.info.max_storage_buffer_range as u64;
+    if bytes > max {
+        return Err(VkError::TooLarge { what: what.into(), bytes, max });
+    }
+    Ok(())
+}
+
 /// Makes prior writes (`src_access` in `src_stage`) visible to later compute shaders and copies.
 pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer, src_access: vk::AccessFlags, src_stage: vk::PipelineStageFlags) {
     let b = vk::MemoryBarrier::default().src_access_mask(src_access).dst_access_mask(

@@ -9,6 +9,7 @@
 //! | `memory.rs` | buffers (`gpu-allocator`), upload/read-back, barriers |
 //! | `pipeline.rs` | shader modules, typed compute pipelines, the dispatch recorder |
 //! | `profiler.rs` | GPU timestamps per pass |
+//! | `raster.rs` | graphics pipelines (dynamic rendering, vertex pulling) |
 pub mod context;
 pub mod device;
 pub mod error;
@@ -17,6 +18,7 @@ pub mod instance;
 pub mod memory;
 pub mod pipeline;
 pub mod profiler;
+pub mod raster;
 
 pub use context::{Context, ContextOptions};
 pub use device::DeviceInfo;
@@ -25,3 +27,4 @@ pub use image::Image;
 pub use memory::{Buffer, MemoryLocation};
 pub use pipeline::{ComputePipeline, Recorder, ShaderModule};
 pub use profiler::{PassTiming, Profiler};
+pub use raster::{GraphicsPipeline, RasterDesc};

@@ -172,6 +172,19 @@ impl Recorder<'_> {
         self.dispatch(pipe, buffers, params, groups)
     }
 
+    /// Dispatches a linear kernel over `n` elements: `ceil(n / workgroup)` workgroups folded into a
+    /// 2D grid (the kernel linearises `wg.y · num_wg.x + wg.x`).
+    pub fn dispatch_linear<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, n: u32) -> VkResult<()> {
+        let groups = n.div_ceil(pipe.kernel.invocations());
+        self.dispatch(pipe, buffers, params, crate::render::scan::fold(groups))
+    }
+
+    /// Fills the first `bytes` of a buffer with a repeated `u32` and makes it visible to kernels.
+    pub fn fill(&mut self, buffer: &Buffer, value: u32) {
+        unsafe { self.ctx.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, buffer.size, value) };
+        barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+    }
+
     /// Runs `f` inside a named GPU-timed pass (when a profiler is attached).
     pub fn pass<R>(&mut self, name: &str, f: impl FnOnce(&mut Self) -> VkResult<R>) -> VkResult<R> {
         let cmd = self.cmd;

@@ -1,0 +1,223 @@
+//! Rendering a frame: G-buffer, then either brute-force deferred shading or the clustered chain.
+//!
+//! Clustered deferred (Olsson et al. 2012; Karas' Vulkan design), one kernel per step:
+//! 1. **G-buffer** (raster) → depth | normal | albedo buffer (`gbuffer.rs`).
+//! 2. **keys** — cluster key per pixel (`clustered::pixel_keys`).
+//! 3. **page table** — mark pages → scan (allocate) → record → store slots → scan → compact
+//!    into the sorted unique-cluster list (`page_table`), all sized from the resolution.
+//! 4. **assignment** — per unique cluster, its lights (naive: every light against the cluster's
+//!    AABB), as counts → scan → fill; offsets + counts give each cluster's list.
+//! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
+//!
+//! Capacities that depend on the view (pages touched, light references) are GPU counters read
+//! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
+//! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
+pub mod gbuffer;
+pub mod reference;
+pub mod resources;
+pub mod scan;
+pub mod stats;
+
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, PassTiming, Profiler};
+use anyhow::{bail, Context as _, Result};
+use glam::Mat4;
+pub use gbuffer::Draw;
+use resources::{ClusterBuffers, Capacities};
+use shaders::cluster_key::{slice_bounds, ClusterGrid};
+use shaders::layout::*;
+
+/// Lighting technique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Technique {
+    /// Every light for every pixel: the correctness reference.
+    Deferred,
+    /// Clustered deferred with unique clusters and naive (all-lights) assignment.
+    ClusteredNaive,
+}
+
+/// Scene data as the renderer consumes it (world space; lights validated).
+pub struct SceneInput<'a> {
+    pub positions: &'a [[f32; 3]],
+    pub normals: &'a [[f32; 3]],
+    pub uvs: &'a [[f32; 2]],
+    pub indices: &'a [u32],
+    pub draws: Vec<Draw>,
+    pub materials: Vec<MaterialGpu>,
+    pub lights: &'a [PointLight],
+    pub view: Mat4,
+    pub fov_y_radians: f32,
+    pub near: f32,
+    pub far: f32,
+    pub effects: u32,
+}
+
+/// How to render.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    pub tile_size: u32,
+    pub technique: Technique,
+    /// `VIEW_SHADED` or `VIEW_HEATMAP`.
+    pub view: u32,
+    pub normal_precision: u32,
+    pub exposure: f32,
+    /// Timed frames after the warm-up frame (0: render once, untimed beyond it).
+    pub frames: u32,
+    /// Keep the cluster data for CPU checks and statistics.
+    pub read_back: bool,
+}
+
+/// GPU results kept for checks and statistics.
+pub struct Readback {
+    /// Reversed-Z depth bits per pixel.
+    pub depth: Vec<u32>,
+    pub keys: Vec<u32>,
+    pub unique: Vec<u32>,
+    pub counts: Vec<u32>,
+    pub offsets: Vec<u32>,
+    pub list: Vec<u32>,
+    pub lights_view: Vec<PointLight>,
+    pub grid: ClusterGrid,
+    pub bounds: Vec<f32>,
+}
+
+/// A rendered frame.
+pub struct Frame {
+    pub pixels: Vec<u32>,
+    /// Median GPU milliseconds per pass over the timed frames (or of the single frame).
+    pub timings: Vec<PassTiming>,
+    pub unique_clusters: u32,
+    pub light_refs: u32,
+    pub pages: u32,
+    /// Times a buffer had to grow and the frame re-run.
+    pub regrowths: u32,
+    pub buffers: Vec<(String, u64)>,
+    pub readback: Option<Readback>,
+    pub grid: ClusterGrid,
+}
+
+/// Lights in view space.
+pub fn lights_to_view(view: Mat4, lights: &[PointLight]) -> Vec<PointLight> {
+    lights
+        .iter()
+        .map(|l| PointLight { position: view.transform_point3(l.position.into()).to_array(), ..*l })
+        .collect()
+}
+
+/// Renders one frame (plus `settings.frames` timed repetitions).
+pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> {
+    let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
+    if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
+        bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
+    }
+    let ctx = &gpu.ctx;
+    let n = s.width * s.height;
+    let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
+        .context("uploading geometry")?;
+    let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
+    let targets = gbuffer::Targets::new(ctx, s.width, s.height).context("allocating the G-buffer")?;
+    let lights_view = lights_to_view(scene.view, scene.lights);
+    let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
+    let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
+    let bounds = slice_bounds(&grid);
+    let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
+    let mut frame_buf = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
+    let params = FrameParams {
+        grid,
+        count: n,
+        num_lights: scene.lights.len() as u32,
+        light_capacity: 0,
+        effects: scene.effects,
+        normal_precision: s.normal_precision,
+        view: s.view,
+        exposure: s.exposure,
+        heat_max: 64,
+    };
+    let mut buffers: Vec<(String, u64)> = vec![
+        ("geometry".into(), geometry.bytes()),
+        ("gbuffer".into(), targets.bytes()),
+        ("lights".into(), lights.size),
+        ("frame".into(), frame_buf.size),
+    ];
+    let mut profiler = Profiler::new(ctx, 16)?;
+    let mut regrowths = 0;
+    let (mut unique_clusters, mut light_refs, mut pages) = (0, 0, 0);
+    let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
+    let mut cluster = None;
+    match s.technique {
+        Technique::Deferred => {
+            for f in 0..=s.frames {
+                gpu.run(Some(&mut profiler), |rec| {
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &gpu.gbuffer, &geometry, &camera, &targets))?;
+                    rec.pass("shading", |rec| {
+                        rec.dispatch_linear(&gpu.kernels.shade_deferred, &[&targets.depth_buf, &targets.normal_buf, &targets.albedo_buf, &lights, &materials, &frame_buf, &bounds_buf], &params, n)
+                    })
+                })?;
+                if f > 0 || s.frames == 0 {
+                    timings_all.push(profiler.results()?);
+                }
+            }
+        }
+        Technique::ClusteredNaive => {
+            let mut caps = Capacities::initial(&grid, scene.lights.len() as u32);
+            let mut cb = ClusterBuffers::new(gpu, &grid, caps)?;
+            let mut f = 0;
+            while f <= s.frames {
+                let mut p = params;
+                p.light_capacity = caps.light_refs;
+                gpu.run(Some(&mut profiler), |rec| {
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &gpu.gbuffer, &geometry, &camera, &targets))?;
+                    cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf)
+                })?;
+                let c: Vec<u32> = cb.counters.read(COUNTERS as usize)?;
+                (unique_clusters, light_refs, pages) =
+                    (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
+                if let Some(grown) = caps.grown(pages, light_refs) {
+                    regrowths += 1;
+                    if regrowths > 8 {
+                        bail!("cluster buffers keep growing ({grown:?}): giving up");
+                    }
+                    caps = grown;
+                    cb = ClusterBuffers::new(gpu, &grid, caps).with_context(|| {
+                        format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)
+                    })?;
+                    continue; // re-run this frame
+                }
+                if f > 0 || s.frames == 0 {
+                    timings_all.push(profiler.results()?);
+                }
+                f += 1;
+            }
+            buffers.extend(cb.sizes());
+            cluster = Some(cb);
+        }
+    }
+    let pixels: Vec<u32> = frame_buf.read(n as usize)?;
+    let readback = if s.read_back {
+        let mut depth = targets.depth_buf;
+        let gbuffer: Vec<u32> = depth.read(n as usize)?;
+        Some(match cluster.as_mut() {
+            Some(cb) => cb.read_back(gbuffer, unique_clusters, light_refs, lights_view.clone(), grid, bounds.clone())?,
+            None => Readback { depth: gbuffer, keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![], lights_view, grid, bounds },
+        })
+    } else {
+        None
+    };
+    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, buffers, readback, grid })
+}
+
+/// Per-pass median over frames (passes matched by position).
+fn median_timings(all: &[Vec<PassTiming>]) -> Vec<PassTiming> {
+    let Some(first) = all.first() else { return Vec::new() };
+    first
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut v: Vec<f64> = all.iter().filter_map(|f| f.get(i).map(|t| t.ms)).collect();
+            v.sort_by(|a, b| a.total_cmp(b));
+            PassTiming { name: p.name.clone(), ms: v[v.len() / 2] }
+        })
+        .collect()
+}

@@ -1,0 +1,82 @@
+//! CPU references for a clustered frame, computed from its read-back data:
+//! * keys recomputed from the G-buffer depth must equal the GPU's bit for bit;
+//! * the unique-cluster list must equal the sorted distinct keys;
+//! * every pixel's cluster list must contain every light whose range touches the pixel's
+//!   view-space position (`lighting::light_touches`) — conservative culling, no dropped light.
+//!
+//! It also computes the statistics of the stats file (lights per cluster / per pixel).
+use super::Readback;
+use anyhow::{ensure, Result};
+use glam::Vec3;
+use shaders::lighting::light_touches;
+use shaders::page_table::{pixel_key, unique_keys_reference, INVALID_KEY};
+use shaders::reconstruct::{distance_from_depth, view_position};
+
+/// Lights-per-cluster and lights-per-pixel figures of a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ListStats {
+    pub mean_per_cluster: f64,
+    pub max_per_cluster: u32,
+    pub mean_per_pixel: f64,
+    pub max_per_pixel: u32,
+}
+
+/// Index of each valid pixel's cluster in `rb.unique` (None for background pixels).
+pub fn pixel_clusters(rb: &Readback) -> Vec<Option<usize>> {
+    rb.keys.iter().map(|&k| if k == INVALID_KEY { None } else { rb.unique.binary_search(&k).ok() }).collect()
+}
+
+pub fn list_stats(rb: &Readback) -> ListStats {
+    let mut s = ListStats::default();
+    if !rb.counts.is_empty() {
+        s.mean_per_cluster = rb.counts.iter().map(|&c| c as f64).sum::<f64>() / rb.counts.len() as f64;
+        s.max_per_cluster = rb.counts.iter().copied().max().unwrap_or(0);
+    }
+    let per_pixel: Vec<u32> = pixel_clusters(rb).into_iter().flatten().map(|c| rb.counts[c]).collect();
+    if !per_pixel.is_empty() {
+        s.mean_per_pixel = per_pixel.iter().map(|&c| c as f64).sum::<f64>() / per_pixel.len() as f64;
+        s.max_per_pixel = per_pixel.iter().copied().max().unwrap_or(0);
+    }
+    s
+}
+
+/// All three checks; an error names the first violations.
+pub fn check(rb: &Readback) -> Result<()> {
+    let g = &rb.grid;
+    let n = (g.width * g.height) as usize;
+    let depth = |i: usize| f32::from_bits(rb.depth[i]);
+    let cpu_keys: Vec<u32> = (0..n).map(|i| pixel_key(g, &rb.bounds, i as u32 % g.width, i as u32 / g.width, depth(i))).collect();
+    let bad_keys: Vec<usize> = (0..n).filter(|&i| cpu_keys[i] != rb.keys[i]).take(5).collect();
+    ensure!(bad_keys.is_empty(), "GPU cluster keys differ from the CPU's at pixels {bad_keys:?}");
+    let expected = unique_keys_reference(&cpu_keys);
+    ensure!(
+        expected == rb.unique,
+        "unique clusters: GPU has {}, CPU reference {} (first GPU {:?}, CPU {:?})",
+        rb.unique.len(),
+        expected.len(),
+        rb.unique.iter().take(4).collect::<Vec<_>>(),
+        expected.iter().take(4).collect::<Vec<_>>()
+    );
+    let clusters = pixel_clusters(rb);
+    let mut missing = Vec::new();
+    for (i, cluster) in clusters.iter().enumerate() {
+        let Some(c) = *cluster else { continue };
+        let list = &rb.list[rb.offsets[c] as usize..(rb.offsets[c] + rb.counts[c]) as usize];
+        ensure!(list.windows(2).all(|w| w[0] < w[1]), "cluster {c}'s list is not strictly increasing");
+        let (px, py) = (i as u32 % g.width, i as u32 / g.width);
+        let p: Vec3 = view_position(g, px, py, distance_from_depth(g.near, depth(i)));
+        for (l, light) in rb.lights_view.iter().enumerate() {
+            if light_touches(light, p) && list.binary_search(&(l as u32)).is_err() {
+                missing.push((px, py, l));
+                if missing.len() >= 5 {
+                    break;
+                }
+            }
+        }
+        if missing.len() >= 5 {
+            break;
+        }
+    }
+    ensure!(missing.is_empty(), "lights touching a pixel are missing from its cluster list (px, py, light): {missing:?}");
+    Ok(())
+}

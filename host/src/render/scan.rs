@@ -1,0 +1,89 @@
+//! Device-wide exclusive prefix sum (reduce-then-scan over workgroup scans).
+//!
+//! Level 0 scans `n` elements in workgroups of 256 (`workgroup_scan`, cooperative), writing one
+//! total per workgroup; the totals are scanned the same way (recursively) and added back
+//! (`scan_add_offsets`). Levels: ⌈log₂₅₆ n⌉ — 3 for 16 M elements.
+//! Memory: `2 × 4 B × (n/256 + n/256² + …)` for the totals and their scans.
+//! The grand total can be stored into a counter slot (`scan_store_total`), so later kernels
+//! read it without a round trip to the host.
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, Recorder, VkResult};
+use shaders::layout::{ScanFixParams, ScanParams};
+use shaders::scan::SCAN_WORKGROUP;
+
+/// Workgroups per dispatch axis (Vulkan guarantees 65 535).
+pub const MAX_GROUPS_PER_AXIS: u32 = 65_535;
+
+/// `groups` workgroups as a 2D grid whose linear index covers them all.
+pub fn fold(groups: u32) -> [u32; 3] {
+    let gx = groups.clamp(1, MAX_GROUPS_PER_AXIS);
+    [gx, groups.div_ceil(gx).max(1), 1]
+}
+
+struct Level {
+    totals: Buffer,
+    scanned: Buffer,
+}
+
+/// Scratch buffers for scanning up to `capacity` elements.
+pub struct DeviceScan {
+    levels: Vec<Level>,
+    pub capacity: u32,
+}
+
+impl DeviceScan {
+    pub fn new(gpu: &Gpu, name: &str, capacity: u32) -> VkResult<Self> {
+        let mut levels = Vec::new();
+        let mut n = capacity.max(1);
+        loop {
+            let groups = n.div_ceil(SCAN_WORKGROUP);
+            let g = fold(groups);
+            let slots = (g[0] * g[1]) as u64;
+            levels.push(Level {
+                totals: Buffer::storage(&gpu.ctx, &format!("{name} scan totals L{}", levels.len()), 4 * slots)?,
+                scanned: Buffer::storage(&gpu.ctx, &format!("{name} scan offsets L{}", levels.len()), 4 * slots)?,
+            });
+            if groups <= 1 {
+                break;
+            }
+            n = groups;
+        }
+        Ok(Self { levels, capacity })
+    }
+
+    /// Bytes of scratch memory.
+    pub fn bytes(&self) -> u64 {
+        self.levels.iter().map(|l| l.totals.size + l.scanned.size).sum()
+    }
+
+    /// Records `output = exclusive_scan(input[..n])` and, with `total`, `counters[slot] = Σ input`.
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, input: &Buffer, output: &Buffer, n: u32, total: Option<(&Buffer, u32)>) -> VkResult<()> {
+        assert!(n <= self.capacity, "scan of {n} elements exceeds its plan ({})", self.capacity);
+        self.record_level(gpu, rec, 0, input, output, n)?;
+        if let Some((counters, slot)) = total {
+            // The top level of *this* scan: the first level whose input fits in one workgroup.
+            let mut m = n.max(1);
+            let mut level = 0;
+            while m > SCAN_WORKGROUP {
+                m = m.div_ceil(SCAN_WORKGROUP);
+                level += 1;
+            }
+            let p = ScanFixParams { count: 1, slot, _pad: [0; 2] };
+            rec.dispatch(&gpu.kernels.scan_store_total, &[&self.levels[level].totals, counters], &p, [1, 1, 1])?;
+        }
+        Ok(())
+    }
+
+    fn record_level(&self, gpu: &Gpu, rec: &mut Recorder<'_>, level: usize, input: &Buffer, output: &Buffer, n: u32) -> VkResult<()> {
+        let l = &self.levels[level];
+        let groups = n.max(1).div_ceil(SCAN_WORKGROUP);
+        let p = ScanParams { count: n, _pad: [0; 3] };
+        rec.dispatch(&gpu.kernels.workgroup_scan, &[input, output, &l.totals], &p, fold(groups))?;
+        if groups > 1 {
+            self.record_level(gpu, rec, level + 1, &l.totals, &l.scanned, groups)?;
+            let fix = ScanFixParams { count: n, slot: 0, _pad: [0; 2] };
+            rec.dispatch(&gpu.kernels.scan_add_offsets, &[&l.scanned, output], &fix, fold(n.div_ceil(256)))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,29 @@
+//! The `--stats` JSON: device, resolution, light count, per-pass GPU milliseconds (median of the
+//! timed frames), bytes per buffer, unique clusters, lights per cluster and per pixel.
+use super::reference::list_stats;
+use super::{Frame, Settings};
+use crate::vk::DeviceInfo;
+use serde_json::{json, Value};
+
+pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings, frame: &Frame) -> Value {
+    let lists = frame.readback.as_ref().map(list_stats).unwrap_or_default();
+    let passes: serde_json::Map<String, Value> = frame.timings.iter().map(|t| (t.name.clone(), json!(t.ms))).collect();
+    let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
+    let buffers: serde_json::Map<String, Value> = frame.buffers.iter().map(|(n, b)| (n.clone(), json!(b))).collect();
+    json!({
+        "device": { "name": device.name, "kind": device.kind, "driver": format!("{} {}", device.driver_name, device.driver_info),
+                    "vulkan": device.api_version, "subgroup_size": device.subgroup_size },
+        "scene": scene,
+        "technique": format!("{:?}", s.technique),
+        "resolution": [s.width, s.height],
+        "tile_size": s.tile_size,
+        "slices": frame.grid.num_slices,
+        "lights": lights,
+        "timed_frames": s.frames,
+        "gpu_ms": { "passes": passes, "total": total },
+        "bytes": { "buffers": buffers, "total": frame.buffers.iter().map(|b| b.1).sum::<u64>() },
+        "clusters": { "unique": frame.unique_clusters, "pages": frame.pages, "light_references": frame.light_refs, "regrowths": frame.regrowths },
+        "lights_per_cluster": { "mean": lists.mean_per_cluster, "max": lists.max_per_cluster },
+        "lights_per_pixel": { "mean": lists.mean_per_pixel, "max": lists.max_per_pixel },
+    })
+}

@@ -1,0 +1,168 @@
+//! `manylights render`: load a scene, add lights, render with a technique, write PNG (+ stats).
+use crate::gpu::Gpu;
+use crate::render::{self, Draw, SceneInput, Settings, Technique};
+use crate::scene::{lights, Scene};
+use anyhow::{bail, Context as _, Result};
+use shaders::layout::{DrawParams, MaterialGpu, PointLight};
+use std::path::PathBuf;
+
+/// What the frame shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum View {
+    Shaded,
+    /// Lights evaluated per pixel on a colour ramp (0 black … 64+ white; legend below the frame).
+    Heatmap,
+    /// Cluster keys hashed to colours.
+    Clusters,
+    /// Decoded G-buffer normals.
+    Normals,
+    /// Exponential depth slices on a colour ramp.
+    Depth,
+}
+
+impl View {
+    pub fn code(self) -> u32 {
+        use shaders::layout::*;
+        match self {
+            Self::Shaded => VIEW_SHADED,
+            Self::Heatmap => VIEW_HEATMAP,
+            Self::Clusters => VIEW_CLUSTERS,
+            Self::Normals => VIEW_NORMALS,
+            Self::Depth => VIEW_DEPTH,
+        }
+    }
+}
+
+/// Arguments of `render` (see `manylights render --help`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Built-in scene (city, corridor, sponza, bunny), a .toml description or an .obj file.
+    #[arg(long, default_value = "city")]
+    pub scene: String,
+    /// Point lights to generate (when the scene description does not give them).
+    #[arg(long, default_value_t = 1000)]
+    pub lights: u32,
+    #[arg(long, value_enum, default_value_t = Technique::ClusteredNaive)]
+    pub technique: Technique,
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    #[arg(long, default_value_t = 720)]
+    pub height: u32,
+    #[arg(long, default_value_t = 32)]
+    pub tile_size: u32,
+    #[arg(long, default_value = "frame.png")]
+    pub out: PathBuf,
+    /// Write statistics (device, per-pass GPU ms, bytes, clusters, lights per cluster/pixel) here.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Timed frames after the warm-up (per-pass median).
+    #[arg(long, default_value_t = 5)]
+    pub frames: u32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, value_enum, default_value_t = View::Shaded)]
+    pub view: View,
+    /// Directory holding sponza/ and bunny/.
+    #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
+    pub assets: PathBuf,
+}
+
+/// Merged geometry, materials and draws of a scene.
+pub struct Flattened {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    pub uvs: Vec<[f32; 2]>,
+    pub indices: Vec<u32>,
+    pub draws: Vec<Draw>,
+    pub materials: Vec<MaterialGpu>,
+}
+
+/// Merges a scene's meshes into one vertex/index set with one draw per mesh.
+pub fn flatten(scene: &Scene, normal_precision: u32) -> Result<Flattened> {
+    let mut f = Flattened { positions: vec![], normals: vec![], uvs: vec![], indices: vec![], draws: vec![], materials: vec![] };
+    for m in &scene.materials {
+        f.materials.push(MaterialGpu { specular: m.specular, roughness: m.roughness, _pad: [0.0; 2] });
+    }
+    if f.materials.is_empty() {
+        f.materials.push(MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] });
+    }
+    if f.materials.len() > shaders::layout::MAX_MATERIALS as usize {
+        bail!("scene has {} materials; the G-buffer addresses at most {}", f.materials.len(), shaders::layout::MAX_MATERIALS);
+    }
+    for mesh in &scene.meshes {
+        let base = f.positions.len() as u32;
+        let first_index = f.indices.len() as u32;
+        f.positions.extend_from_slice(&mesh.positions);
+        f.normals.extend_from_slice(&mesh.normals);
+        f.uvs.extend_from_slice(&mesh.uvs);
+        f.indices.extend(mesh.indices.iter().map(|i| i + base));
+        let material = (mesh.material as usize).min(f.materials.len() - 1);
+        let albedo = scene.materials.get(material).map(|m| m.albedo).unwrap_or([0.8; 3]);
+        f.draws.push(Draw {
+            first_index,
+            index_count: mesh.indices.len() as u32,
+            params: DrawParams { albedo, material: material as u32, normal_precision, _pad: [0; 3] },
+        });
+    }
+    Ok(f)
+}
+
+/// The renderer's view of a scene and its lights.
+pub fn scene_input<'a>(scene: &Scene, flat: &'a Flattened, lights: &'a [PointLight]) -> SceneInput<'a> {
+    let c = &scene.camera;
+    SceneInput {
+        positions: &flat.positions,
+        normals: &flat.normals,
+        uvs: &flat.uvs,
+        indices: &flat.indices,
+        draws: flat.draws.clone(),
+        materials: flat.materials.clone(),
+        lights,
+        view: c.view(),
+        fov_y_radians: c.fov_y_degrees.to_radians(),
+        near: c.near,
+        far: c.far,
+        effects: scene.effects.flags(),
+    }
+}
+
+pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
+    if a.lights == 0 && a.scene.ends_with(".obj") {
+        eprintln!("note: --lights 0 renders an unlit frame");
+    }
+    let mut scene = Scene::load(&a.scene, &a.assets).with_context(|| format!("loading scene {:?}", a.scene))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    if scene.lights.is_empty() {
+        scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).context("generating lights")?;
+    }
+    scene.validate().context("scene")?;
+    let precision = shaders::layout::PRECISION_OCT16;
+    let flat = flatten(&scene, precision)?;
+    let input = scene_input(&scene, &flat, &scene.lights);
+    let settings = Settings {
+        width: a.width,
+        height: a.height,
+        tile_size: a.tile_size,
+        technique: a.technique,
+        view: a.view.code(),
+        normal_precision: precision,
+        exposure: 1.0,
+        frames: a.frames,
+        read_back: a.stats.is_some(),
+    };
+    eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.width, a.height, a.technique);
+    let frame = render::render(gpu, &input, &settings)?;
+    crate::debug_frame::save_png(&a.out, a.width, a.height, &frame.pixels)?;
+    for t in &frame.timings {
+        eprintln!("{:<12} {:9.3} ms (GPU, median of {})", t.name, t.ms, a.frames.max(1));
+    }
+    if let Some(path) = &a.stats {
+        let json = render::stats::stats_json(&gpu.ctx.info, &scene.name, scene.lights.len(), &settings, &frame);
+        std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    eprintln!("wrote {}", a.out.display());
+    Ok(())
+}

@@ -1,0 +1,211 @@
+//! TOML scene descriptions: geometry plus an optional camera, lights and effect overrides.
+//!
+//! ```toml
+//! name = "my scene"               # optional: the file's stem otherwise
+//! geometry = "city"               # city | corridor | sponza | bunny | an .obj path (relative
+//!                                 # to this file)
+//! [camera]                        # optional: the geometry's default camera otherwise
+//! position = [0, 2, 0]
+//! target = [0, 2, -10]
+//! up = [0, 1, 0]                  # optional, default +y
+//! fov_y = 60                      # degrees; optional, default 60
+//! near = 0.1                      # optional, default: the geometry's
+//! far = 1000                      # optional, default: the geometry's
+//! [lights]                        # optional: no lights otherwise (the CLI then adds some)
+//! count = 1000
+//! distribution = "uniform"        # uniform | hotspots | surfaces
+//! seed = 7                        # optional, default 1
+//! radius = 5.0                    # optional: every light this radius (default: lights.rs rule)
+//! intensity = 1.0                 # optional
+//! clusters = 8                    # hotspots only, default 8
+//! offset = 0.1                    # surfaces only: distance off the surface, default 0.5 % of
+//!                                 # the scene diagonal
+//! [effects]                       # optional overrides of what the content implies
+//! specular = false
+//! textures = true
+//! alpha_test = true
+//! ```
+//! Unknown keys are errors (`deny_unknown_fields`); so are values out of range (negative
+//! counts, fov outside (0, 180), NaN or infinite numbers). Every error names the file and key.
+use super::{lights, Camera, Scene};
+use anyhow::{anyhow, bail, Result};
+use glam::Vec3;
+use serde::Deserialize;
+use std::path::Path;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Description {
+    pub name: Option<String>,
+    pub geometry: String,
+    pub camera: Option<CameraDesc>,
+    pub lights: Option<LightsDesc>,
+    pub effects: Option<EffectsDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub position: [f32; 3],
+    pub target: [f32; 3],
+    pub up: Option<[f32; 3]>,
+    pub fov_y: Option<f32>,
+    pub near: Option<f32>,
+    pub far: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Distribution {
+    Uniform,
+    Hotspots,
+    Surfaces,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightsDesc {
+    pub count: usize,
+    pub distribution: Distribution,
+    pub seed: Option<u64>,
+    pub radius: Option<f32>,
+    pub intensity: Option<f32>,
+    pub clusters: Option<usize>,
+    pub offset: Option<f32>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EffectsDesc {
+    pub specular: Option<bool>,
+    pub textures: Option<bool>,
+    pub alpha_test: Option<bool>,
+}
+
+/// Parses a description (no file access); `file` only names the source in errors.
+pub fn parse(text: &str, file: &Path) -> Result<Description> {
+    let d: Description = toml::from_str(text).map_err(|e| anyhow!("scene description {}: {}", file.display(), e.to_string().trim_end()))?;
+    check(&d).map_err(|e| anyhow!("scene description {}: {e}", file.display()))?;
+    Ok(d)
+}
+
+fn finite(key: &str, values: &[f32]) -> Result<()> {
+    if values.iter().any(|v| !v.is_finite()) {
+        bail!("{key} must be finite, got {values:?}");
+    }
+    Ok(())
+}
+
+/// Value checks serde cannot express; errors name the key.
+fn check(d: &Description) -> Result<()> {
+    if d.geometry.trim().is_empty() {
+        bail!("geometry must name a built-in scene or an .obj file");
+    }
+    if let Some(c) = &d.camera {
+        finite("camera.position", &c.position)?;
+        finite("camera.target", &c.target)?;
+        if let Some(up) = c.up {
+            finite("camera.up", &up)?;
+        }
+        if let Some(fov) = c.fov_y {
+            finite("camera.fov_y", &[fov])?;
+            if !(fov > 0.0 && fov < 180.0) {
+                bail!("camera.fov_y = {fov} is out of range: it must be in (0, 180) degrees");
+            }
+        }
+        for (key, v) in [("camera.near", c.near), ("camera.far", c.far)] {
+            if let Some(v) = v {
+                finite(key, &[v])?;
+                if v <= 0.0 {
+                    bail!("{key} = {v} must be > 0");
+                }
+            }
+        }
+        if c.position == c.target {
+            bail!("camera.position and camera.target are the same point {:?}", c.position);
+        }
+    }
+    if let Some(l) = &d.lights {
+        if l.count > lights::MAX_LIGHTS {
+            bail!("lights.count = {} is more than the {} supported", l.count, lights::MAX_LIGHTS);
+        }
+        for (key, v) in [("lights.radius", l.radius), ("lights.intensity", l.intensity)] {
+            if let Some(v) = v {
+                finite(key, &[v])?;
+                if v < 0.0 {
+                    bail!("{key} = {v} must be ≥ 0");
+                }
+            }
+        }
+        if let Some(v) = l.offset {
+            finite("lights.offset", &[v])?;
+        }
+        if l.clusters == Some(0) {
+            bail!("lights.clusters must be at least 1");
+        }
+        if l.clusters.is_some() && l.distribution != Distribution::Hotspots {
+            bail!("lights.clusters only applies to distribution = \"hotspots\"");
+        }
+        if l.offset.is_some() && l.distribution != Distribution::Surfaces {
+            bail!("lights.offset only applies to distribution = \"surfaces\"");
+        }
+    }
+    Ok(())
+}
+
+/// Loads a description file and builds its scene (geometry, camera, lights, effects).
+pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
+    if !path.is_file() {
+        bail!("scene file {} not found", path.display());
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow!("cannot read scene file {}: {e}", path.display()))?;
+    let d = parse(&text, path)?;
+    let at = |e: anyhow::Error| anyhow!("scene description {}: {e:#}", path.display());
+    let geometry = d.geometry.trim();
+    let mut scene = match geometry.to_ascii_lowercase().as_str() {
+        "city" => super::procedural::city(),
+        "corridor" => super::procedural::corridor(),
+        g @ ("sponza" | "bunny") => super::obj::load_builtin(g, assets_dir).map_err(at)?,
+        g if g.ends_with(".obj") => {
+            let obj = path.parent().unwrap_or(Path::new("")).join(geometry);
+            super::obj::load(&obj).map_err(at)?
+        }
+        _ => return Err(at(anyhow!("geometry = {geometry:?} is neither city, corridor, sponza, bunny nor an .obj file"))),
+    };
+    scene.name = d.name.clone().unwrap_or_else(|| path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()));
+    if let Some(c) = &d.camera {
+        let default = scene.camera;
+        scene.camera = Camera {
+            position: Vec3::from_array(c.position),
+            target: Vec3::from_array(c.target),
+            up: c.up.map_or(Vec3::Y, Vec3::from_array),
+            fov_y_degrees: c.fov_y.unwrap_or(60.0),
+            near: c.near.unwrap_or(default.near),
+            far: c.far.unwrap_or(default.far),
+        };
+        scene.camera.validate().map_err(|e| at(anyhow!("[camera]: {e}")))?;
+    }
+    if let Some(l) = &d.lights {
+        let seed = l.seed.unwrap_or(1);
+        let mut generated = match l.distribution {
+            Distribution::Uniform => lights::uniform(&scene, l.count, seed),
+            Distribution::Hotspots => lights::hotspots(scene.bounds, l.count, seed, l.clusters.unwrap_or(8)),
+            Distribution::Surfaces => {
+                let offset = l.offset.unwrap_or(0.005 * (scene.bounds.1 - scene.bounds.0).length());
+                lights::on_surfaces(&scene, l.count, seed, offset)
+            }
+        }
+        .map_err(|e| at(anyhow!("[lights]: {e}")))?;
+        for light in &mut generated {
+            light.radius = l.radius.unwrap_or(light.radius);
+            light.intensity = l.intensity.unwrap_or(light.intensity);
+        }
+        scene.lights = generated;
+    }
+    if let Some(e) = &d.effects {
+        scene.effects.specular = e.specular.unwrap_or(scene.effects.specular);
+        scene.effects.textures = e.textures.unwrap_or(scene.effects.textures);
+        scene.effects.alpha_test = e.alpha_test.unwrap_or(scene.effects.alpha_test);
+    }
+    Ok(scene)
+}

@@ -1,0 +1,337 @@
+//! Loading tests: descriptions, OBJ files (written to a temporary directory), the shipped example
+//! descriptions, and Sponza / the bunny when `../shared/assets` has them.
+use super::*;
+use shaders::layout::{EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
+use std::time::Instant;
+
+/// A fresh, empty directory under the system temp dir (removed on drop).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("manylights-scene-{tag}-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+
+    fn write(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn assets() -> PathBuf {
+    std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))
+}
+
+fn load_err(spec: &Path) -> String {
+    format!("{:#}", Scene::load(spec.to_str().unwrap(), &assets()).unwrap_err())
+}
+
+#[test]
+fn built_ins_load_and_unknown_names_are_refused() {
+    for name in ["city", "corridor", "CITY"] {
+        let s = Scene::load(name, Path::new("/nonexistent")).unwrap();
+        assert!(s.triangle_count() > 0 && s.lights.is_empty() && s.warnings.is_empty());
+    }
+    let e = format!("{:#}", Scene::load("cty", &assets()).unwrap_err());
+    assert!(e.contains("unknown scene \"cty\"") && e.contains("city, corridor, sponza, bunny"), "{e}");
+}
+
+#[test]
+fn missing_files_are_named() {
+    for f in ["/x/y.obj", "/x/y.toml"] {
+        let e = load_err(Path::new(f));
+        assert_eq!(e, format!("scene file {f} not found"));
+    }
+    let e = format!("{:#}", Scene::load("sponza", Path::new("/no/assets")).unwrap_err());
+    assert!(e.contains("/no/assets/sponza/sponza.obj") && e.contains("--assets <dir>") && e.contains("MANYLIGHTS_ASSETS"), "{e}");
+}
+
+#[test]
+fn malformed_obj_names_the_file_and_the_problem() {
+    let dir = TempDir::new("bad-obj");
+    let p = dir.write("broken.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 999\n");
+    let e = load_err(&p);
+    assert!(e.contains(&p.display().to_string()) && e.contains("face vertex index out of bounds"), "{e}");
+    let p = dir.write("junk.obj", "v 0 0 zero\n");
+    let e = load_err(&p);
+    assert!(e.contains("junk.obj") && e.contains("parse error"), "{e}");
+}
+
+#[test]
+fn obj_materials_textures_and_missing_pieces() {
+    let dir = TempDir::new("obj");
+    let mut img = image::RgbaImage::new(4, 2);
+    img.put_pixel(1, 0, image::Rgba([10, 20, 30, 40]));
+    std::fs::create_dir_all(dir.0.join("tex")).unwrap();
+    img.save(dir.0.join("tex").join("albedo.png")).unwrap();
+    image::GrayImage::from_pixel(2, 2, image::Luma([200])).save(dir.0.join("tex").join("mask.png")).unwrap();
+    dir.write(
+        "m.mtl",
+        "newmtl shiny\nKd 0.5 0.25 1\nKs 0.1 0.4 0.2\nNs 198\nd 0\nmap_Kd tex\\albedo.png\n\
+         newmtl leaf\nKd 1 1 1\nmap_Kd tex/missing.tga\nmap_d tex/mask.png\n",
+    );
+    // Two triangles of `shiny` without normals or uvs, a quad of `leaf` with uvs, no material
+    // on the last one.
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+               o a\nusemtl shiny\nf 1 2 3\nf 1 3 4\no b\nusemtl leaf\nf 1/1 2/2 3/3 4/4\no c\nusemtl nothing\nf 1 3 4\n";
+    let p = dir.write("scene.obj", obj);
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+    assert_eq!(s.name, "scene");
+    assert_eq!(s.triangle_count(), 5);
+    let shiny = &s.materials[s.meshes[0].material as usize];
+    assert_eq!((shiny.name.as_str(), shiny.albedo, shiny.specular), ("shiny", [0.5, 0.25, 1.0], 0.4));
+    assert!((shiny.roughness - 0.1).abs() < 1e-6, "Ns 198 → √(2/200) = 0.1: {}", shiny.roughness);
+    assert_eq!(shiny.albedo_texture.as_deref(), Some(dir.0.join("tex/albedo.png").as_path()), "backslash read as a separator");
+    let t = s.texture(shiny.albedo_texture.as_ref().unwrap()).unwrap();
+    assert_eq!((t.width, t.height, t.kind, &t.rgba8[4..8]), (4, 2, TextureKind::Albedo, &[10u8, 20, 30, 40][..]));
+    let leaf = &s.materials[s.meshes[1].material as usize];
+    assert_eq!(leaf.albedo_texture, None, "the missing texture is dropped");
+    let mask = s.texture(leaf.alpha_mask_texture.as_ref().unwrap()).unwrap();
+    assert_eq!((mask.kind, &mask.rgba8[..4]), (TextureKind::AlphaMask, &[200u8; 4][..]));
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(s.warnings[0].contains("leaf") && s.warnings[0].contains("missing.tga"), "{:?}", s.warnings);
+    assert_eq!(s.meshes[2].material as usize, s.materials.len() - 1, "unknown usemtl → default material");
+    // Normals: face-averaged (+z) where absent; uvs flipped (OBJ v up → Vulkan v down) or zero.
+    assert!(s.meshes.iter().all(|m| m.normals.iter().all(|n| *n == [0.0, 0.0, 1.0])));
+    assert!(s.meshes[0].uvs.iter().all(|uv| *uv == [0.0, 0.0]));
+    let m = &s.meshes[1];
+    let uv_of = |pos: [f32; 3]| m.uvs[m.positions.iter().position(|p| *p == pos).unwrap()];
+    assert_eq!((uv_of([0.0, 0.0, 0.0]), uv_of([1.0, 1.0, 0.0])), ([0.0, 1.0], [1.0, 0.0]));
+    assert_eq!(s.effects, Effects { specular: true, textures: true, alpha_test: true });
+    assert_eq!(s.effects.flags(), EFFECT_SPECULAR | EFFECT_TEXTURES | EFFECT_ALPHA_TEST);
+    // The default camera sees the whole thing from +z.
+    let c = s.camera;
+    c.validate().unwrap();
+    assert!(c.position.z > 1.0 && c.near < c.position.z - 0.1 && c.far > c.position.length() + 1.0);
+
+    // Without its MTL: one default material and a warning, no failure.
+    std::fs::remove_file(dir.0.join("m.mtl")).unwrap();
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+    assert_eq!(s.materials.len(), 1);
+    assert!(s.warnings.len() == 1 && s.warnings[0].contains("material library"), "{:?}", s.warnings);
+    assert!(s.meshes.iter().all(|m| m.material == 0));
+}
+
+#[test]
+fn validate_names_the_bad_item() {
+    let mut s = procedural::corridor();
+    s.validate().unwrap();
+    s.meshes[2].positions[5][1] = f32::NAN;
+    let e = s.validate().unwrap_err().to_string();
+    assert!(e.contains("mesh 2 vertex 5"), "{e}");
+    let mut s = procedural::corridor();
+    s.lights = lights::uniform(&s, 10, 1).unwrap();
+    s.lights[3].radius = 0.0;
+    s.validate().unwrap();
+    s.lights[4].radius = -1.0;
+    assert!(s.validate().unwrap_err().to_string().contains("light 4 has a negative radius"));
+    s.lights[4].radius = 1.0;
+    s.lights[7].position[2] = f32::INFINITY;
+    assert!(s.validate().unwrap_err().to_string().contains("light 7"));
+    let mut s = procedural::corridor();
+    s.camera.far = s.camera.near;
+    assert!(s.validate().unwrap_err().to_string().contains("far plane"));
+}
+
+fn description_err(text: &str) -> String {
+    let dir = TempDir::new("desc");
+    let p = dir.write("bad.toml", text);
+    let e = load_err(&p);
+    assert!(e.contains(&p.display().to_string()), "error must name the file: {e}");
+    e
+}
+
+#[test]
+fn descriptions_load_and_reject_bad_input() {
+    let dir = TempDir::new("desc-ok");
+    let obj = dir.write("geo/tri.obj", "v 0 0 0\nv 4 0 0\nv 0 4 0\nf 1 2 3\n");
+    assert!(obj.exists());
+    let p = dir.write(
+        "d.toml",
+        "geometry = \"geo/tri.obj\"\n[camera]\nposition = [0, 1, 10]\ntarget = [0, 1, 0]\nnear = 0.5\nfar = 50\n\
+         [lights]\ncount = 20\ndistribution = \"surfaces\"\noffset = 0.25\n[effects]\nspecular = true\n",
+    );
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+    assert_eq!((s.name.as_str(), s.lights.len(), s.triangle_count()), ("d", 20, 1));
+    assert_eq!((s.camera.position, s.camera.near, s.camera.far, s.camera.fov_y_degrees), (Vec3::new(0.0, 1.0, 10.0), 0.5, 50.0, 60.0));
+    assert!(s.lights.iter().all(|l| (l.position[2] - 0.25).abs() < 1e-6), "0.25 off the z = 0 triangle");
+    assert!(s.effects.specular && !s.effects.textures);
+
+    let e = description_err("geometry = \"city\"\ncolour = 3\n");
+    assert!(e.contains("unknown field `colour`"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"uniform\"\nradus = 2\n");
+    assert!(e.contains("unknown field `radus`"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = -1\ndistribution = \"uniform\"\n");
+    assert!(e.contains("count = -1") && e.contains("invalid value"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"everywhere\"\n");
+    assert!(e.contains("everywhere") && e.contains("uniform"), "{e}");
+    let e = description_err("geometry = \"city\"\n[camera]\nposition = [0, 1, 0]\ntarget = [0, 1, -1]\nfov_y = 500\n");
+    assert!(e.contains("camera.fov_y = 500") && e.contains("(0, 180)"), "{e}");
+    let e = description_err("geometry = \"city\"\n[camera]\nposition = [0, nan, 0]\ntarget = [0, 1, -1]\n");
+    assert!(e.contains("camera.position must be finite"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"uniform\"\nradius = nan\n");
+    assert!(e.contains("lights.radius must be finite"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 100000000\ndistribution = \"uniform\"\n");
+    assert!(e.contains("lights.count") && e.contains("more than"), "{e}");
+    let e = description_err("geometry = \"castle\"\n");
+    assert!(e.contains("geometry = \"castle\""), "{e}");
+    let e = description_err("geometry = \"missing.obj\"\n");
+    assert!(e.contains("missing.obj not found"), "{e}");
+    let e = description_err("geometry = \"city\"\n[camera]\nposition = [0, 1, 0]\ntarget = [0, 1, -1]\nup = [0, 0, -1]\n");
+    assert!(e.contains("[camera]") && e.contains("parallel"), "{e}");
+    let e = description_err("name = \"x\"\n");
+    assert!(e.contains("missing field `geometry`"), "{e}");
+}
+
+#[test]
+fn shipped_example_descriptions_load() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets"));
+    let mut found = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "toml") {
+            let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap_or_else(|e| panic!("{}: {e:#}", p.display()));
+            assert!(!s.lights.is_empty() && s.warnings.is_empty(), "{}", p.display());
+            let again = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+            assert_eq!(s.lights, again.lights, "{}: lights are seeded", p.display());
+            found += 1;
+        }
+    }
+    assert!(found >= 3, "{found} example descriptions in assets/");
+    let h = Scene::load(dir.join("corridor-hotspots.toml").to_str().unwrap(), &assets()).unwrap();
+    assert!(!h.effects.specular && h.camera.fov_y_degrees == 70.0 && h.lights.len() == 4000);
+}
+
+/// Distance from `p` to triangle `abc` (Ericson, Real-Time Collision Detection §5.1.5), in f64:
+/// the corridor's 120 m sliver triangles defeat f32 barycentrics.
+fn dist_to_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> f64 {
+    let [p, a, b, c] = [p, a, b, c].map(|v| v.as_dvec3());
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (p - (a + ab * (d1 / (d1 - d3)))).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (p - (a + ac * (d2 / (d2 - d6)))).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (p - (b + (c - b) * w)).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    (p - (a + ab * (vb * denom) + ac * (vc * denom))).length()
+}
+
+#[test]
+fn surface_lights_lie_offset_from_a_triangle() {
+    let s = procedural::corridor();
+    let offset = 0.3;
+    let l = lights::on_surfaces(&s, 300, 9, offset).unwrap();
+    assert_eq!(l, lights::on_surfaces(&s, 300, 9, offset).unwrap());
+    for (i, light) in l.iter().enumerate() {
+        let p = Vec3::from_array(light.position);
+        let nearest = s
+            .meshes
+            .iter()
+            .flat_map(|m| (0..m.triangle_count()).map(move |t| m.triangle(t)))
+            .map(|t| dist_to_triangle(p, t))
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest <= offset as f64 + 1e-4, "light {i} is {nearest} from the nearest triangle");
+    }
+    // Area-weighted: the floor (6.4 × 120.4 m of a few thousand m²) gets a fair share.
+    let on_floor = l.iter().filter(|l| (l.position[1] - offset).abs() < 1e-4).count();
+    assert!(on_floor > 20, "{on_floor} of 300 lights on the floor");
+    assert!(lights::on_surfaces(&Scene::new("empty", vec![], vec![], vec![], s.camera), 1, 1, 0.1).is_err());
+}
+
+#[test]
+fn sponza_when_present() {
+    let path = assets().join("sponza/sponza.obj");
+    if !path.exists() {
+        eprintln!("note: {} absent, Sponza test skipped", path.display());
+        return;
+    }
+    let t0 = Instant::now();
+    let s = Scene::load("sponza", &assets()).unwrap();
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    let texels: usize = s.textures.iter().map(|t| t.rgba8.len() / 4).sum();
+    eprintln!(
+        "sponza: {} triangles, {} meshes, {} materials, {} textures ({texels} texels), {} warnings, loaded in {ms:.0} ms",
+        s.triangle_count(),
+        s.meshes.len(),
+        s.materials.len(),
+        s.textures.len(),
+        s.warnings.len()
+    );
+    for w in &s.warnings {
+        eprintln!("  warning: {w}");
+    }
+    assert!(s.triangle_count() > 200_000);
+    assert_eq!((s.meshes.len(), s.materials.len()), (25, 25));
+    assert_eq!(s.materials.iter().filter(|m| m.albedo_texture.is_some()).count(), 24);
+    assert_eq!(s.materials.iter().filter(|m| m.alpha_mask_texture.is_some()).count(), 3);
+    assert_eq!(s.textures.len(), 24 + 3, "24 distinct diffuse maps and 3 masks");
+    assert!(s.warnings.is_empty());
+    assert_eq!(s.effects, Effects { specular: false, textures: true, alpha_test: true }, "Sponza's Ks is 0 everywhere");
+    let (lo, hi) = s.bounds;
+    assert!((lo.x + 1920.0).abs() < 2.0 && (hi.y - 1428.75).abs() < 2.0, "{lo} {hi}");
+    let c = s.camera;
+    c.validate().unwrap();
+    assert!(c.position.cmpgt(lo).all() && c.position.cmplt(hi).all(), "camera inside the atrium: {c:?}");
+    assert!((c.target - c.position).normalize().x < -0.9, "looking along the long axis");
+    let l = lights::uniform(&s, 10_000, 1).unwrap();
+    assert!(l.iter().all(|l| l.radius > 0.0));
+}
+
+#[test]
+fn bunny_when_present() {
+    let path = assets().join("bunny/bunny.obj");
+    if !path.exists() {
+        eprintln!("note: {} absent, bunny test skipped", path.display());
+        return;
+    }
+    let t0 = Instant::now();
+    let s = Scene::load("bunny", &assets()).unwrap();
+    eprintln!("bunny: {} triangles, loaded in {:.0} ms", s.triangle_count(), t0.elapsed().as_secs_f64() * 1e3);
+    assert_eq!(s.triangle_count(), 69_451);
+    assert_eq!((s.materials.len(), s.textures.len(), s.effects.flags()), (1, 0, 0));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // Face-averaged normals point away from the centre on most of the (closed-ish) surface.
+    let m = &s.meshes[0];
+    let centre = (s.bounds.0 + s.bounds.1) * 0.5;
+    let outward = m.positions.iter().zip(&m.normals).filter(|(p, n)| (Vec3::from_array(**p) - centre).dot(Vec3::from_array(**n)) > 0.0).count();
+    assert!(outward * 10 > m.positions.len() * 8, "{outward} of {} normals outward", m.positions.len());
+    let c = s.camera;
+    c.validate().unwrap();
+    let d = c.position.distance(centre);
+    assert!(c.near < d - 0.08 && c.far > d + 0.08 && d < 1.0, "{c:?}");
+}
