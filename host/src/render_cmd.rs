@@ -126,15 +126,36 @@ pub fn scene_input<'a>(scene: &Scene, flat: &'a Flattened, lights: &'a [PointLig
     }
 }
 
-pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
-    if a.lights == 0 && a.scene.ends_with(".obj") {
-        eprintln!("note: --lights 0 renders an unlit frame");
+/// Checks what can be checked before loading anything: sizes and whether the lights fit.
+pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
+    let max = shaders::cluster_key::MAX_DIMENSION;
+    if a.width == 0 || a.height == 0 || a.width > max || a.height > max {
+        bail!("--width {} --height {}: both must be in 1..={max}", a.width, a.height);
     }
+    let bytes = a.lights as u64 * std::mem::size_of::<PointLight>() as u64;
+    let limit = gpu.ctx.info.max_storage_buffer_range as u64;
+    if bytes > limit {
+        bail!(
+            "--lights {} needs {} MiB for the light buffer; {} addresses at most {} MiB per buffer",
+            a.lights,
+            bytes >> 20,
+            gpu.ctx.info.name,
+            limit >> 20
+        );
+    }
+    Ok(())
+}
+
+pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
+    check_args(gpu, a)?;
     let mut scene = Scene::load(&a.scene, &a.assets).with_context(|| format!("loading scene {:?}", a.scene))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
     if scene.lights.is_empty() {
+        if a.lights == 0 {
+            bail!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
+        }
         scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).context("generating lights")?;
     }
     scene.validate().context("scene")?;
@@ -153,7 +174,10 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         read_back: a.stats.is_some(),
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.width, a.height, a.technique);
-    let frame = render::render(gpu, &input, &settings)?;
+    let mut frame = render::render(gpu, &input, &settings)?;
+    if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.width, a.height, render::HEAT_MAX) {
+        eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);
+    }
     crate::debug_frame::save_png(&a.out, a.width, a.height, &frame.pixels)?;
     for t in &frame.timings {
         eprintln!("{:<12} {:9.3} ms (GPU, median of {})", t.name, t.ms, a.frames.max(1));

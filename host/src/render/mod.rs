@@ -13,6 +13,7 @@
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
 pub mod gbuffer;
+pub mod legend;
 pub mod reference;
 pub mod resources;
 pub mod scan;
@@ -98,6 +99,9 @@ pub struct Frame {
     pub grid: ClusterGrid,
 }
 
+/// Lights per pixel at the top of the heatmap ramp.
+pub const HEAT_MAX: u32 = 64;
+
 /// Lights in view space.
 pub fn lights_to_view(view: Mat4, lights: &[PointLight]) -> Vec<PointLight> {
     lights
@@ -133,7 +137,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         normal_precision: s.normal_precision,
         view: s.view,
         exposure: s.exposure,
-        heat_max: 64,
+        heat_max: HEAT_MAX,
     };
     let mut buffers: Vec<(String, u64)> = vec![
         ("geometry".into(), geometry.bytes()),

@@ -20,6 +20,11 @@
 //! clusters = 8                    # hotspots only, default 8
 //! offset = 0.1                    # surfaces only: distance off the surface, default 0.5 % of
 //!                                 # the scene diagonal
+//! [[light]]                       # optional, repeatable: an explicit light (world space)
+//! position = [0, 3, -10]
+//! radius = 8
+//! colour = [1, 0.8, 0.6]          # optional, default white
+//! intensity = 20                  # optional, default: lights.rs rule for the radius
 //! [effects]                       # optional overrides of what the content implies
 //! specular = false
 //! textures = true
@@ -40,7 +45,22 @@ pub struct Description {
     pub geometry: String,
     pub camera: Option<CameraDesc>,
     pub lights: Option<LightsDesc>,
+    /// Explicit lights (`[[light]]` tables), added after the generated ones.
+    #[serde(default)]
+    pub light: Vec<LightDesc>,
     pub effects: Option<EffectsDesc>,
+}
+
+/// One explicit point light (world space). Validated with the scene (`Scene::validate`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    pub position: [f32; 3],
+    pub radius: f32,
+    /// Linear RGB (default white).
+    pub colour: Option<[f32; 3]>,
+    /// Default: `lights::DEFAULT_INTENSITY · lights::radius_scaled_intensity(radius)`.
+    pub intensity: Option<f32>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -202,6 +222,12 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
         }
         scene.lights = generated;
     }
+    scene.lights.extend(d.light.iter().map(|l| shaders::layout::PointLight {
+        position: l.position,
+        radius: l.radius,
+        colour: l.colour.unwrap_or([1.0; 3]),
+        intensity: l.intensity.unwrap_or(lights::DEFAULT_INTENSITY * lights::radius_scaled_intensity(l.radius)),
+    }));
     if let Some(e) = &d.effects {
         scene.effects.specular = e.specular.unwrap_or(scene.effects.specular);
         scene.effects.textures = e.textures.unwrap_or(scene.effects.textures);
