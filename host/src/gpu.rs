@@ -21,8 +21,9 @@ pub struct Kernels {
     pub compact_clusters: ComputePipeline<FrameParams>,
     pub cluster_light_counts: ComputePipeline<FrameParams>,
     pub cluster_light_fill: ComputePipeline<FrameParams>,
-    pub shade_clustered: ComputePipeline<FrameParams>,
-    pub shade_deferred: ComputePipeline<FrameParams>,
+    /// Shading variants `[diffuse only, with specular]`: a scene runs only the one it needs.
+    pub shade_clustered: [ComputePipeline<FrameParams>; 2],
+    pub shade_deferred: [ComputePipeline<FrameParams>; 2],
     pub scan_add_offsets: ComputePipeline<ScanFixParams>,
     pub scan_store_total: ComputePipeline<ScanFixParams>,
 }
@@ -43,8 +44,14 @@ impl Kernels {
             compact_clusters: ComputePipeline::new(ctx, &module, kernels::COMPACT_CLUSTERS)?,
             cluster_light_counts: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS)?,
             cluster_light_fill: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL)?,
-            shade_clustered: ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED)?,
-            shade_deferred: ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED)?,
+            shade_clustered: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED_SPECULAR)?,
+            ],
+            shade_deferred: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED_SPECULAR)?,
+            ],
             scan_add_offsets: ComputePipeline::new(ctx, &module, kernels::SCAN_ADD_OFFSETS)?,
             scan_store_total: ComputePipeline::new(ctx, &module, kernels::SCAN_STORE_TOTAL)?,
         })

@@ -227,26 +227,27 @@ pub fn cluster_light_fill(
     for_each_cluster_light(p, bounds, lights, unique[c as usize], |n, l| list[(base + n) as usize] = l);
 }
 
-/// 8. Clustered shading: per pixel, its cluster's lights.
-#[spirv(compute(threads(256)))]
-pub fn shade_clustered(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+/// 8. Clustered shading: per pixel, its cluster's lights. Two entry points: `_diffuse` for scenes
+/// without specular materials (the specular term is compiled out) and `_specular`.
+#[inline]
+fn shade_clustered_impl<const SPECULAR: bool>(
+    wg: UVec3,
+    nwg: UVec3,
+    local: u32,
+    p: &FrameParams,
+    depth: &[f32],
+    normals: &[u32],
+    albedo: &[u32],
+    keys: &[u32],
+    page_base: &[u32],
+    slot_rank: &[u32],
+    counts: &[u32],
+    offsets: &[u32],
+    list: &[u32],
+    lights: &[PointLight],
+    materials: &[MaterialGpu],
+    frame: &mut [u32],
+    bounds: &[f32],
 ) {
     let i = linear_index(wg, nwg, local);
     if i >= p.count {
@@ -265,15 +266,14 @@ pub fn shade_clustered(
     let mut t = 0;
     while t < count {
         let light = lights[list[(first + t) as usize] as usize];
-        sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, p.effects);
+        sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
         t += 1;
     }
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, count);
 }
 
-/// Brute-force deferred shading: every light for every pixel (the correctness reference).
 #[spirv(compute(threads(256)))]
-pub fn shade_deferred(
+pub fn shade_clustered_diffuse(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
@@ -281,10 +281,58 @@ pub fn shade_deferred(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+) {
+    shade_clustered_impl::<false>(wg, nwg, local, p, depth, normals, albedo, keys, page_base, slot_rank, counts, offsets, list, lights, materials, frame, bounds);
+}
+
+#[spirv(compute(threads(256)))]
+pub fn shade_clustered_specular(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+) {
+    shade_clustered_impl::<true>(wg, nwg, local, p, depth, normals, albedo, keys, page_base, slot_rank, counts, offsets, list, lights, materials, frame, bounds);
+}
+
+/// Brute-force deferred shading: every light for every pixel (the correctness reference), in
+/// `_diffuse` and `_specular` variants like the clustered shading.
+#[inline]
+fn shade_deferred_impl<const SPECULAR: bool>(
+    wg: UVec3,
+    nwg: UVec3,
+    local: u32,
+    p: &FrameParams,
+    depth: &[f32],
+    normals: &[u32],
+    albedo: &[u32],
+    lights: &[PointLight],
+    materials: &[MaterialGpu],
+    frame: &mut [u32],
+    bounds: &[f32],
 ) {
     let i = linear_index(wg, nwg, local);
     if i >= p.count {
@@ -303,12 +351,46 @@ pub fn shade_deferred(
     while l < p.num_lights {
         let light = lights[l as usize];
         if lighting::light_touches(&light, pos) {
-            sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, p.effects);
+            sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
             touching += 1;
         }
         l += 1;
     }
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, touching);
+}
+
+#[spirv(compute(threads(256)))]
+pub fn shade_deferred_diffuse(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+) {
+    shade_deferred_impl::<false>(wg, nwg, local, p, depth, normals, albedo, lights, materials, frame, bounds);
+}
+
+#[spirv(compute(threads(256)))]
+pub fn shade_deferred_specular(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+) {
+    shade_deferred_impl::<true>(wg, nwg, local, p, depth, normals, albedo, lights, materials, frame, bounds);
 }
 
 /// Device-wide scan, step 3: add each workgroup's offset to its elements.

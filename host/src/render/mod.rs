@@ -99,6 +99,12 @@ pub struct Frame {
     pub grid: ClusterGrid,
 }
 
+/// Which shading variant a frame runs: 1 (with the specular term) only if the scene has specular
+/// materials.
+pub fn specular_variant(p: &FrameParams) -> usize {
+    usize::from(p.effects & EFFECT_SPECULAR != 0)
+}
+
 /// Lights per pixel at the top of the heatmap ramp.
 pub const HEAT_MAX: u32 = 64;
 
@@ -156,7 +162,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                 gpu.run(Some(&mut profiler), |rec| {
                     rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &gpu.gbuffer, &geometry, &camera, &targets))?;
                     rec.pass("shading", |rec| {
-                        rec.dispatch_linear(&gpu.kernels.shade_deferred, &[&targets.depth_buf, &targets.normal_buf, &targets.albedo_buf, &lights, &materials, &frame_buf, &bounds_buf], &params, n)
+                        rec.dispatch_linear(&gpu.kernels.shade_deferred[specular_variant(&params)], &[&targets.depth_buf, &targets.normal_buf, &targets.albedo_buf, &lights, &materials, &frame_buf, &bounds_buf], &params, n)
                     })
                 })?;
                 if f > 0 || s.frames == 0 {

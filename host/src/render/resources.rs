@@ -135,7 +135,7 @@ impl ClusterBuffers {
         })?;
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
-                &k.shade_clustered,
+                &k.shade_clustered[super::specular_variant(p)],
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.keys, &self.page_base, &self.slot_rank, &self.counts, &self.offsets, &self.list, lights, materials, frame, bounds],
                 p,
                 n,
