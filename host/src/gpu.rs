@@ -60,15 +60,15 @@ impl Kernels {
 
 pub struct Gpu {
     pub kernels: Kernels,
-    /// The G-buffer raster pipeline (graphics module).
-    pub gbuffer: crate::vk::GraphicsPipeline,
+    /// The G-buffer raster pipelines (graphics module), indexed like `render::gbuffer::VARIANTS`.
+    pub gbuffer: [crate::vk::GraphicsPipeline; 3],
     pub ctx: Context,
 }
 
 impl Gpu {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
         let ctx = Context::new(opts)?;
-        let made = Kernels::new(&ctx).and_then(|k| Ok((k, crate::render::gbuffer::pipeline(&ctx)?)));
+        let made = Kernels::new(&ctx).and_then(|k| Ok((k, crate::render::gbuffer::pipelines(&ctx)?)));
         match made {
             Ok((kernels, gbuffer)) => Ok(Self { kernels, gbuffer, ctx }),
             // Name what the validation layer saw, not just the failed call.

@@ -1,7 +1,7 @@
 //! `manylights render`: load a scene, add lights, render with a technique, write PNG (+ stats).
 use crate::gpu::Gpu;
-use crate::render::{self, Draw, SceneInput, Settings, Technique};
-use crate::scene::{lights, Scene};
+use crate::render::{self, Draw, SceneInput, Settings, Technique, TextureData};
+use crate::scene::{lights, Scene, TextureKind};
 use anyhow::{bail, Context as _, Result};
 use shaders::layout::{DrawParams, MaterialGpu, PointLight};
 use std::path::PathBuf;
@@ -97,18 +97,27 @@ pub fn flatten(scene: &Scene, normal_precision: u32) -> Result<Flattened> {
         f.uvs.extend_from_slice(&mesh.uvs);
         f.indices.extend(mesh.indices.iter().map(|i| i + base));
         let material = (mesh.material as usize).min(f.materials.len() - 1);
-        let albedo = scene.materials.get(material).map(|m| m.albedo).unwrap_or([0.8; 3]);
+        let m = scene.materials.get(material);
+        let albedo = m.map(|m| m.albedo).unwrap_or([0.8; 3]);
+        // Textures only where the scene's effects call for them (no sampling otherwise).
+        let texture = |path: Option<&std::path::PathBuf>| {
+            path.and_then(|p| scene.textures.iter().position(|t| &t.path == p)).map(|i| i as u32)
+        };
+        let albedo_texture = if scene.effects.textures { texture(m.and_then(|m| m.albedo_texture.as_ref())) } else { None };
+        let mask_texture = if scene.effects.alpha_test { texture(m.and_then(|m| m.alpha_mask_texture.as_ref())) } else { None };
         f.draws.push(Draw {
             first_index,
             index_count: mesh.indices.len() as u32,
             params: DrawParams { albedo, material: material as u32, normal_precision, _pad: [0; 3] },
+            albedo_texture,
+            mask_texture,
         });
     }
     Ok(f)
 }
 
 /// The renderer's view of a scene and its lights.
-pub fn scene_input<'a>(scene: &Scene, flat: &'a Flattened, lights: &'a [PointLight]) -> SceneInput<'a> {
+pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [PointLight]) -> SceneInput<'a> {
     let c = &scene.camera;
     SceneInput {
         positions: &flat.positions,
@@ -118,6 +127,11 @@ pub fn scene_input<'a>(scene: &Scene, flat: &'a Flattened, lights: &'a [PointLig
         draws: flat.draws.clone(),
         materials: flat.materials.clone(),
         lights,
+        textures: scene
+            .textures
+            .iter()
+            .map(|t| TextureData { width: t.width, height: t.height, rgba8: &t.rgba8, srgb: t.kind == TextureKind::Albedo })
+            .collect(),
         view: c.view(),
         fov_y_radians: c.fov_y_degrees.to_radians(),
         near: c.near,

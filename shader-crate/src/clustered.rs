@@ -227,8 +227,10 @@ pub fn cluster_light_fill(
     for_each_cluster_light(p, bounds, lights, unique[c as usize], |n, l| list[(base + n) as usize] = l);
 }
 
-/// 8. Clustered shading: per pixel, its cluster's lights. Two entry points: `_diffuse` for scenes
-/// without specular materials (the specular term is compiled out) and `_specular`.
+/// 8. Clustered shading: per pixel, its cluster's lights.
+///
+/// Two entry points: `_diffuse` for scenes without specular materials (the specular term is
+/// compiled out) and `_specular`.
 #[inline]
 fn shade_clustered_impl<const SPECULAR: bool>(
     wg: UVec3,

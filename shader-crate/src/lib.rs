@@ -15,6 +15,8 @@
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 #![cfg_attr(target_arch = "spirv", no_std)]
+// `raster::sample_draw_uniform` emits one SPIR-V instruction with `asm!` (as spirv-std does).
+#![cfg_attr(all(target_arch = "spirv", feature = "graphics"), feature(asm_experimental_arch))]
 // NaN-aware comparisons are deliberate: `!(x > a)` is true for NaN, which is how every kernel maps
 // bad input to a defined result; `clamp`/`contains` would change that (and `f32::clamp` asserts).
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_clamp, clippy::manual_range_contains)]

@@ -12,7 +12,9 @@
 //!   8 + 4 bytes per pixel beside the 4-byte depth.
 use crate::layout::{DrawParams, RasterCamera};
 use crate::octahedral::{self, Precision};
-use spirv_std::glam::{Mat4, Vec3, Vec4};
+use spirv_std::glam::{Mat4, Vec2, Vec3, Vec4};
+use spirv_std::image::SampledImage;
+use spirv_std::Image;
 use spirv_std::spirv;
 
 /// Reads element `i` of a flat `[x, y, z, x, y, z, …]` buffer.
@@ -26,6 +28,40 @@ pub fn fetch3(buf: &[f32], i: usize) -> Vec3 {
 pub fn encode_gbuffer_normal(n_view: Vec3, precision: u32) -> u32 {
     octahedral::encode(n_view.to_array(), Precision::from_u32(precision))[0]
 }
+
+/// A combined image sampler of 2D float colour data.
+pub type Texture2d = SampledImage<Image!(2D, type = f32, sampled)>;
+
+/// Samples a texture that is the same for every invocation of the draw (bound per draw with
+/// push descriptors). spirv-std's `sample` decorates its operands `NonUniform`, which needs the
+/// `ShaderNonUniform` capability lavapipe lacks; a draw-uniform texture needs no such thing.
+#[cfg(target_arch = "spirv")]
+#[inline]
+pub fn sample_draw_uniform(texture: &Texture2d, uv: Vec2) -> Vec4 {
+    let mut result = Vec4::ZERO;
+    // SAFETY: one OpImageSampleImplicitLod on a valid combined image sampler, in a fragment shader.
+    unsafe {
+        core::arch::asm!(
+            "%sampled = OpLoad typeof*{1} {1}",
+            "%coord = OpLoad typeof*{2} {2}",
+            "%result = OpImageSampleImplicitLod typeof*{0} %sampled %coord",
+            "OpStore {0} %result",
+            in(reg) &mut result,
+            in(reg) texture,
+            in(reg) &uv,
+        );
+    }
+    result
+}
+
+/// Off the GPU there is no texture unit: the CPU references never rasterise.
+#[cfg(not(target_arch = "spirv"))]
+pub fn sample_draw_uniform(_texture: &Texture2d, _uv: Vec2) -> Vec4 {
+    unimplemented!("texture sampling runs on the GPU only")
+}
+
+/// Alpha-mask coverage below which a fragment is cut out.
+pub const ALPHA_CUTOFF: f32 = 0.5;
 
 #[spirv(vertex)]
 #[allow(clippy::too_many_arguments)]
@@ -60,4 +96,64 @@ pub fn gbuffer_fs(
     let n = if front_facing { in_normal } else { -in_normal };
     *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
     *out_albedo = Vec3::from_array(draw.albedo).extend(draw.material as f32 / 255.0);
+}
+
+/// The vertex shader of textured draws: as [`gbuffer_vs`] plus the texture coordinate.
+#[spirv(vertex)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_vs_uv(
+    #[spirv(vertex_index)] vertex_index: i32,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] uvs: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] camera: &RasterCamera,
+    #[spirv(position)] out_position: &mut Vec4,
+    out_normal: &mut Vec3,
+    out_uv: &mut Vec2,
+) {
+    gbuffer_vs(vertex_index, positions, normals, uvs, camera, out_position, out_normal);
+    let i = vertex_index as usize;
+    *out_uv = Vec2::new(uvs[2 * i], uvs[2 * i + 1]);
+}
+
+/// Textured draws: albedo = material colour × texture (sRGB image: sampled as linear).
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_textured(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    out_normal: &mut u32,
+    out_albedo: &mut Vec4,
+) {
+    let n = if front_facing { in_normal } else { -in_normal };
+    let texel = sample_draw_uniform(albedo_map, in_uv);
+    *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
+    *out_albedo = (Vec3::from_array(draw.albedo) * texel.truncate()).extend(draw.material as f32 / 255.0);
+}
+
+/// Alpha-tested textured draws (Sponza's foliage and chains): fragments whose mask coverage is
+/// below [`ALPHA_CUTOFF`] are demoted to helpers, so they write neither depth nor targets.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_masked(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    #[spirv(descriptor_set = 0, binding = 5)] mask_map: &Texture2d,
+    out_normal: &mut u32,
+    out_albedo: &mut Vec4,
+) {
+    let coverage = sample_draw_uniform(mask_map, in_uv);
+    if coverage.x < ALPHA_CUTOFF {
+        spirv_std::arch::demote_to_helper_invocation();
+    }
+    let n = if front_facing { in_normal } else { -in_normal };
+    let texel = sample_draw_uniform(albedo_map, in_uv);
+    *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
+    *out_albedo = (Vec3::from_array(draw.albedo) * texel.truncate()).extend(draw.material as f32 / 255.0);
 }

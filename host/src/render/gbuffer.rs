@@ -5,7 +5,8 @@
 //!
 //! Memory: targets 4 + 4 + 4 B/px, plus 12 B/px of buffers (24 MB at 1080p in all).
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Context, GraphicsPipeline, Image, RasterDesc, Recorder, ShaderModule, VkResult};
+use crate::vk::image::upload_rgba8;
+use crate::vk::{Buffer, Context, GraphicsPipeline, Image, RasterDesc, Recorder, Sampler, ShaderModule, VkResult};
 use ash::vk;
 use shaders::layout::{DrawParams, RasterCamera};
 
@@ -16,31 +17,101 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// The raster module (rust-gpu output of the `graphics` feature), embedded at build time.
 pub const GRAPHICS_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_GRAPHICS_SPV"));
 
-/// The G-buffer pipeline.
-pub fn pipeline(ctx: &Context) -> VkResult<GraphicsPipeline> {
+/// G-buffer pipeline variants, by what a draw's material needs: `(name, vertex, fragment,
+/// combined image samplers)`. A scene without textures binds and samples none.
+pub const VARIANTS: [(&str, &str, &str, u32); 3] = [
+    ("gbuffer", "raster::gbuffer_vs", "raster::gbuffer_fs", 0),
+    ("gbuffer textured", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured", 1),
+    ("gbuffer alpha-tested", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked", 2),
+];
+
+/// The G-buffer pipelines, indexed like [`VARIANTS`].
+pub fn pipelines(ctx: &Context) -> VkResult<[GraphicsPipeline; 3]> {
     let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
-    GraphicsPipeline::new(
-        ctx,
-        &module,
-        &RasterDesc {
-            name: "gbuffer",
-            vertex_entry: "raster::gbuffer_vs",
-            fragment_entry: "raster::gbuffer_fs",
-            vertex_storage_buffers: 4,
-            push_constant_bytes: std::mem::size_of::<DrawParams>() as u32,
-            color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT],
-            depth_format: DEPTH_FORMAT,
-            depth_compare: vk::CompareOp::GREATER,
-        },
-    )
+    let make = |(name, vertex_entry, fragment_entry, fragment_samplers): (&str, &str, &str, u32)| {
+        GraphicsPipeline::new(
+            ctx,
+            &module,
+            &RasterDesc {
+                name,
+                vertex_entry,
+                fragment_entry,
+                vertex_storage_buffers: 4,
+                fragment_samplers,
+                push_constant_bytes: std::mem::size_of::<DrawParams>() as u32,
+                color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT],
+                depth_format: DEPTH_FORMAT,
+                depth_compare: vk::CompareOp::GREATER,
+            },
+        )
+    };
+    Ok([make(VARIANTS[0])?, make(VARIANTS[1])?, make(VARIANTS[2])?])
 }
 
-/// One draw: a range of the merged index buffer and its material.
+/// One draw: a range of the merged index buffer, its material and its textures (indices into
+/// the scene's texture list).
 #[derive(Clone, Copy, Debug)]
 pub struct Draw {
     pub first_index: u32,
     pub index_count: u32,
     pub params: DrawParams,
+    pub albedo_texture: Option<u32>,
+    pub mask_texture: Option<u32>,
+}
+
+impl Draw {
+    /// Index into [`VARIANTS`].
+    pub fn variant(&self) -> usize {
+        match (self.albedo_texture, self.mask_texture) {
+            (_, Some(_)) => 2,
+            (Some(_), None) => 1,
+            (None, None) => 0,
+        }
+    }
+}
+
+/// Texels of one texture, as the scene loaded them.
+#[derive(Clone, Copy, Debug)]
+pub struct TextureData<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: &'a [u8],
+    /// Colour data stored in sRGB (sampled as linear); masks are linear.
+    pub srgb: bool,
+}
+
+/// The scene's textures on the GPU, a white fallback and the sampler.
+pub struct Textures {
+    images: Vec<Image>,
+    white: Image,
+    sampler: Sampler,
+}
+
+impl Textures {
+    pub fn upload(ctx: &Context, textures: &[TextureData<'_>]) -> VkResult<Self> {
+        let images = textures
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
+                upload_rgba8(ctx, &format!("texture {i}"), t.width, t.height, format, t.rgba8)
+            })
+            .collect::<VkResult<Vec<_>>>()?;
+        let white = upload_rgba8(ctx, "white texture", 1, 1, vk::Format::R8G8B8A8_UNORM, &[255; 4])?;
+        Ok(Self { images, white, sampler: Sampler::linear_repeat(ctx)? })
+    }
+
+    fn info(&self, index: Option<u32>) -> [vk::DescriptorImageInfo; 1] {
+        let img = index.and_then(|i| self.images.get(i as usize)).unwrap_or(&self.white);
+        [vk::DescriptorImageInfo::default()
+            .sampler(self.sampler.raw)
+            .image_view(img.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.images.iter().map(|i| 4 * i.extent.width as u64 * i.extent.height as u64).sum()
+    }
 }
 
 /// Scene geometry on the GPU (merged buffers; world space).
@@ -115,7 +186,7 @@ impl Targets {
 }
 
 /// Records the G-buffer pass and the copies into the targets' buffers.
-pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, pipe: &GraphicsPipeline, geo: &Geometry, camera: &Buffer, t: &Targets) -> VkResult<()> {
+pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Textures, camera: &Buffer, t: &Targets) -> VkResult<()> {
     let d = &gpu.ctx.device;
     let cmd = rec.cmd;
     let color_out = (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
@@ -155,27 +226,39 @@ pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, pipe: &GraphicsPipeline, geo: &
     let buffers = [&geo.positions, &geo.normals, &geo.uvs, camera];
     let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
         buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
-    let writes: Vec<_> = infos
-        .iter()
-        .enumerate()
-        .map(|(i, info)| vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info))
-        .collect();
     unsafe {
         d.cmd_begin_rendering(cmd, &info);
         d.cmd_set_viewport(cmd, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: t.width as f32, height: t.height as f32, min_depth: 0.0, max_depth: 1.0 }]);
         d.cmd_set_scissor(cmd, 0, &[area]);
-        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.raw);
-        gpu.ctx.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.layout, 0, &writes);
         d.cmd_bind_index_buffer(cmd, geo.indices.raw, 0, vk::IndexType::UINT32);
-        for draw in &geo.draws {
-            if draw.index_count == 0 {
-                continue;
+    }
+    let mut bound = usize::MAX;
+    for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
+        let variant = draw.variant();
+        let pipe = &gpu.gbuffer[variant];
+        let images = [textures.info(draw.albedo_texture), textures.info(draw.mask_texture)];
+        let mut writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info))
+            .collect();
+        writes.extend(images.iter().take(VARIANTS[variant].3 as usize).enumerate().map(|(s, info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_binding(4 + s as u32)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .image_info(info)
+        }));
+        unsafe {
+            if bound != variant {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.raw);
+                bound = variant;
             }
+            gpu.ctx.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.layout, 0, &writes);
             d.cmd_push_constants(cmd, pipe.layout, vk::ShaderStageFlags::FRAGMENT, 0, bytemuck::bytes_of(&draw.params));
             d.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
         }
-        d.cmd_end_rendering(cmd);
     }
+    unsafe { d.cmd_end_rendering(cmd) };
     for img in [&t.normal, &t.albedo] {
         img.transition(cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, color_out.0, color_out.1, transfer_read.0, transfer_read.1);
     }

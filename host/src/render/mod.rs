@@ -23,7 +23,7 @@ use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler};
 use anyhow::{bail, Context as _, Result};
 use glam::Mat4;
-pub use gbuffer::Draw;
+pub use gbuffer::{Draw, TextureData};
 use resources::{ClusterBuffers, Capacities};
 use shaders::cluster_key::{slice_bounds, ClusterGrid};
 use shaders::layout::*;
@@ -46,6 +46,8 @@ pub struct SceneInput<'a> {
     pub draws: Vec<Draw>,
     pub materials: Vec<MaterialGpu>,
     pub lights: &'a [PointLight],
+    /// Textures the draws index (`Draw::albedo_texture` / `mask_texture`).
+    pub textures: Vec<TextureData<'a>>,
     pub view: Mat4,
     pub fov_y_radians: f32,
     pub near: f32,
@@ -128,6 +130,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         .context("uploading geometry")?;
     let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
     let targets = gbuffer::Targets::new(ctx, s.width, s.height).context("allocating the G-buffer")?;
+    let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
     let lights_view = lights_to_view(scene.view, scene.lights);
     let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
     let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
@@ -147,6 +150,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     };
     let mut buffers: Vec<(String, u64)> = vec![
         ("geometry".into(), geometry.bytes()),
+        ("textures".into(), textures.bytes()),
         ("gbuffer".into(), targets.bytes()),
         ("lights".into(), lights.size),
         ("frame".into(), frame_buf.size),
@@ -160,7 +164,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         Technique::Deferred => {
             for f in 0..=s.frames {
                 gpu.run(Some(&mut profiler), |rec| {
-                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &gpu.gbuffer, &geometry, &camera, &targets))?;
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
                     rec.pass("shading", |rec| {
                         rec.dispatch_linear(&gpu.kernels.shade_deferred[specular_variant(&params)], &[&targets.depth_buf, &targets.normal_buf, &targets.albedo_buf, &lights, &materials, &frame_buf, &bounds_buf], &params, n)
                     })
@@ -178,7 +182,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                 let mut p = params;
                 p.light_capacity = caps.light_refs;
                 gpu.run(Some(&mut profiler), |rec| {
-                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &gpu.gbuffer, &geometry, &camera, &targets))?;
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
                     cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf)
                 })?;
                 let c: Vec<u32> = cb.counters.read(COUNTERS as usize)?;

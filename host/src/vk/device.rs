@@ -208,7 +208,8 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
         .subgroup_size_control(true)
         .compute_full_subgroups(info.full_subgroups)
         .synchronization2(true)
-        .dynamic_rendering(true);
+        .dynamic_rendering(true)
+        .shader_demote_to_helper_invocation(true);
     let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
     let exts = [khr::push_descriptor::NAME.as_ptr()];

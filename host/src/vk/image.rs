@@ -5,6 +5,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
+
 pub struct Image {
     ctx: Context,
     pub raw: vk::Image,
@@ -121,4 +122,74 @@ impl Drop for Image {
         }
         unsafe { self.ctx.device.destroy_image(self.raw, None) };
     }
+}
+
+/// A linear, repeating sampler (RAII).
+pub struct Sampler {
+    ctx: Context,
+    pub raw: vk::Sampler,
+}
+
+impl Sampler {
+    pub fn linear_repeat(ctx: &Context) -> VkResult<Self> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .max_lod(0.0);
+        let raw = unsafe { ctx.device.create_sampler(&info, None) }.call("vkCreateSampler")?;
+        Ok(Self { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
+    }
+}
+
+/// Uploads tightly packed RGBA8 texels into a new sampled image, left in
+/// `SHADER_READ_ONLY_OPTIMAL` for fragment shaders.
+pub fn upload_rgba8(ctx: &Context, name: &str, width: u32, height: u32, format: vk::Format, texels: &[u8]) -> VkResult<Image> {
+    if texels.len() as u64 != 4 * width as u64 * height as u64 {
+        return Err(VkError::InvalidImage { name: name.into(), what: format!("{} bytes for {width}x{height} RGBA8", texels.len()) });
+    }
+    let img = Image::new_2d(ctx, name, width, height, format, vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)?;
+    let mut staging = super::memory::Buffer::new(
+        ctx,
+        &format!("{name} (upload)"),
+        texels.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(texels)?;
+    ctx.submit_and_wait(|cmd| {
+        img.transition(
+            cmd,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        );
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1))
+            .image_extent(vk::Extent3D { width, height, depth: 1 });
+        unsafe { ctx.device.cmd_copy_buffer_to_image(cmd, staging.raw, img.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]) };
+        img.transition(
+            cmd,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+            vk::PipelineStageFlags::FRAGMENT_SHADER,
+            vk::AccessFlags::SHADER_READ,
+        );
+        Ok(())
+    })?;
+    Ok(img)
 }

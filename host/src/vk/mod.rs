@@ -23,7 +23,7 @@ pub mod raster;
 pub use context::{Context, ContextOptions};
 pub use device::DeviceInfo;
 pub use error::{VkError, VkResult};
-pub use image::Image;
+pub use image::{Image, Sampler};
 pub use memory::{Buffer, MemoryLocation};
 pub use pipeline::{ComputePipeline, Recorder, ShaderModule};
 pub use profiler::{PassTiming, Profiler};

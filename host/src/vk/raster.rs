@@ -13,6 +13,8 @@ pub struct RasterDesc<'a> {
     pub fragment_entry: &'a str,
     /// Storage buffers read by the vertex stage (set 0, bindings `0..n`).
     pub vertex_storage_buffers: u32,
+    /// Combined image samplers read by the fragment stage (bindings after the storage buffers).
+    pub fragment_samplers: u32,
     /// Push-constant bytes (fragment stage).
     pub push_constant_bytes: u32,
     pub color_formats: &'a [vk::Format],
@@ -30,7 +32,7 @@ pub struct GraphicsPipeline {
 impl GraphicsPipeline {
     pub fn new(ctx: &Context, module: &ShaderModule, desc: &RasterDesc<'_>) -> VkResult<Self> {
         let d = &ctx.device;
-        let bindings: Vec<_> = (0..desc.vertex_storage_buffers)
+        let mut bindings: Vec<_> = (0..desc.vertex_storage_buffers)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
@@ -39,6 +41,13 @@ impl GraphicsPipeline {
                     .stage_flags(vk::ShaderStageFlags::VERTEX)
             })
             .collect();
+        bindings.extend((0..desc.fragment_samplers).map(|s| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(desc.vertex_storage_buffers + s)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+        }));
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&bindings);
