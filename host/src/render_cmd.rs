@@ -62,6 +62,9 @@ pub struct RenderArgs {
     pub seed: u64,
     #[arg(long, value_enum, default_value_t = View::Shaded)]
     pub view: View,
+    /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
+    #[arg(long)]
+    pub time: Option<f32>,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
@@ -171,6 +174,12 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
             bail!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
         }
         scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).context("generating lights")?;
+    }
+    if let Some(t) = a.time {
+        if !t.is_finite() {
+            bail!("--time {t} is not a finite number of seconds");
+        }
+        scene.lights = lights::animate(&scene.lights, t);
     }
     scene.validate().context("scene")?;
     let precision = shaders::layout::PRECISION_OCT16;

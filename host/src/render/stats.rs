@@ -6,7 +6,12 @@ use crate::vk::DeviceInfo;
 use serde_json::{json, Value};
 
 pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings, frame: &Frame) -> Value {
-    let lists = frame.readback.as_ref().map(list_stats).unwrap_or_default();
+    let mut lists = frame.readback.as_ref().map(list_stats).unwrap_or_default();
+    if s.technique == super::Technique::Deferred {
+        // Brute force evaluates every light at every pixel (and has no clusters).
+        lists.mean_per_pixel = lights as f64;
+        lists.max_per_pixel = lights as u32;
+    }
     let passes: serde_json::Map<String, Value> = frame.timings.iter().map(|t| (t.name.clone(), json!(t.ms))).collect();
     let total: f64 = frame.timings.iter().map(|t| t.ms).sum();
     let buffers: serde_json::Map<String, Value> = frame.buffers.iter().map(|(n, b)| (n.clone(), json!(b))).collect();
