@@ -37,14 +37,9 @@ pub enum Command {
     Devices,
 }
 
-#[derive(Args, Debug)]
-pub struct DebugFrameArgs {
-    /// What to show.
-    #[arg(long, value_enum, default_value_t = DebugView::Clusters)]
-    pub view: DebugView,
-    /// Normal-encoding precision used by the normals / octa-error views.
-    #[arg(long, value_enum, default_value_t = Precision::Oct8)]
-    pub precision: Precision,
+/// Size, cluster tile and output file of a frame (shared by `render` and `debug-frame`).
+#[derive(Args, Debug, Clone)]
+pub struct FrameArgs {
     #[arg(long, default_value_t = 1280)]
     pub width: u32,
     #[arg(long, default_value_t = 720)]
@@ -55,6 +50,18 @@ pub struct DebugFrameArgs {
     /// Output PNG.
     #[arg(long, default_value = "frame.png")]
     pub out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct DebugFrameArgs {
+    /// What to show.
+    #[arg(long, value_enum, default_value_t = DebugView::Clusters)]
+    pub view: DebugView,
+    /// Normal-encoding precision used by the normals / octa-error views.
+    #[arg(long, value_enum, default_value_t = Precision::Oct8)]
+    pub precision: Precision,
+    #[command(flatten)]
+    pub frame: FrameArgs,
 }
 
 fn open(dev: &DeviceArgs) -> Result<Gpu> {
@@ -85,10 +92,11 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::DebugFrame(a) => {
             let gpu = open(&cli.device)?;
+            let f = &a.frame;
             let spec = FrameSpec {
-                width: a.width,
-                height: a.height,
-                tile_size: a.tile_size,
+                width: f.width,
+                height: f.height,
+                tile_size: f.tile_size,
                 near: 0.1,
                 far: 500.0,
                 fov_y_degrees: 60.0,
@@ -96,11 +104,11 @@ pub fn run(cli: Cli) -> Result<()> {
                 precision: a.precision,
             };
             let (pixels, timings) = debug_frame::render_gpu(&gpu, &spec)?;
-            debug_frame::save_png(&a.out, a.width, a.height, &pixels)?;
+            debug_frame::save_png(&f.out, f.width, f.height, &pixels)?;
             for t in &timings {
                 eprintln!("{:<12} {:8.3} ms (GPU)", t.name, t.ms);
             }
-            eprintln!("wrote {}", a.out.display());
+            eprintln!("wrote {}", f.out.display());
             finish(&gpu)
         }
         Command::Check => {

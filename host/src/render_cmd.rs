@@ -44,14 +44,8 @@ pub struct RenderArgs {
     pub lights: u32,
     #[arg(long, value_enum, default_value_t = Technique::ClusteredNaive)]
     pub technique: Technique,
-    #[arg(long, default_value_t = 1280)]
-    pub width: u32,
-    #[arg(long, default_value_t = 720)]
-    pub height: u32,
-    #[arg(long, default_value_t = 32)]
-    pub tile_size: u32,
-    #[arg(long, default_value = "frame.png")]
-    pub out: PathBuf,
+    #[command(flatten)]
+    pub frame: crate::cli::FrameArgs,
     /// Write statistics (device, per-pass GPU ms, bytes, clusters, lights per cluster/pixel) here.
     #[arg(long)]
     pub stats: Option<PathBuf>,
@@ -146,8 +140,8 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
 /// Checks what can be checked before loading anything: sizes and whether the lights fit.
 pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let max = shaders::cluster_key::MAX_DIMENSION;
-    if a.width == 0 || a.height == 0 || a.width > max || a.height > max {
-        bail!("--width {} --height {}: both must be in 1..={max}", a.width, a.height);
+    if a.frame.width == 0 || a.frame.height == 0 || a.frame.width > max || a.frame.height > max {
+        bail!("--width {} --height {}: both must be in 1..={max}", a.frame.width, a.frame.height);
     }
     let bytes = a.lights as u64 * std::mem::size_of::<PointLight>() as u64;
     let limit = gpu.ctx.info.max_storage_buffer_range as u64;
@@ -186,9 +180,9 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let flat = flatten(&scene, precision)?;
     let input = scene_input(&scene, &flat, &scene.lights);
     let settings = Settings {
-        width: a.width,
-        height: a.height,
-        tile_size: a.tile_size,
+        width: a.frame.width,
+        height: a.frame.height,
+        tile_size: a.frame.tile_size,
         technique: a.technique,
         view: a.view.code(),
         normal_precision: precision,
@@ -196,12 +190,12 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         frames: a.frames,
         read_back: a.stats.is_some(),
     };
-    eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.width, a.height, a.technique);
+    eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;
-    if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.width, a.height, render::HEAT_MAX) {
+    if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.frame.width, a.frame.height, render::HEAT_MAX) {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);
     }
-    crate::debug_frame::save_png(&a.out, a.width, a.height, &frame.pixels)?;
+    crate::debug_frame::save_png(&a.frame.out, a.frame.width, a.frame.height, &frame.pixels)?;
     for t in &frame.timings {
         eprintln!("{:<12} {:9.3} ms (GPU, median of {})", t.name, t.ms, a.frames.max(1));
     }
@@ -210,6 +204,6 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
-    eprintln!("wrote {}", a.out.display());
+    eprintln!("wrote {}", a.frame.out.display());
     Ok(())
 }

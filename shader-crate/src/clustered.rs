@@ -14,6 +14,22 @@ use crate::{cluster_bounds, lighting, octahedral, reconstruct};
 use spirv_std::glam::{UVec3, Vec3};
 use spirv_std::spirv;
 
+/// Declares a `_diffuse` and a `_specular` compute entry point (256 invocations) with the given
+/// parameters, calling `$imp::<false>` / `$imp::<true>`: one parameter list, two pipelines.
+macro_rules! specular_variants {
+    ($diffuse:ident, $specular:ident, $imp:ident, ($($(#[$attr:meta])* $arg:ident: $ty:ty),* $(,)?)) => {
+        #[spirv(compute(threads(256)))]
+        pub fn $diffuse($($(#[$attr])* $arg: $ty),*) {
+            $imp::<false>($($arg),*);
+        }
+
+        #[spirv(compute(threads(256)))]
+        pub fn $specular($($(#[$attr])* $arg: $ty),*) {
+            $imp::<true>($($arg),*);
+        }
+    };
+}
+
 /// Colour of pixels that show no geometry.
 pub const BACKGROUND_RGBA8: u32 = 0xff_20_18_18;
 
@@ -274,8 +290,7 @@ fn shade_clustered_impl<const SPECULAR: bool>(
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, count);
 }
 
-#[spirv(compute(threads(256)))]
-pub fn shade_clustered_diffuse(
+specular_variants!(shade_clustered_diffuse, shade_clustered_specular, shade_clustered_impl, (
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
@@ -293,32 +308,7 @@ pub fn shade_clustered_diffuse(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
-) {
-    shade_clustered_impl::<false>(wg, nwg, local, p, depth, normals, albedo, keys, page_base, slot_rank, counts, offsets, list, lights, materials, frame, bounds);
-}
-
-#[spirv(compute(threads(256)))]
-pub fn shade_clustered_specular(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
-) {
-    shade_clustered_impl::<true>(wg, nwg, local, p, depth, normals, albedo, keys, page_base, slot_rank, counts, offsets, list, lights, materials, frame, bounds);
-}
+));
 
 /// Brute-force deferred shading: every light for every pixel (the correctness reference), in
 /// `_diffuse` and `_specular` variants like the clustered shading.
@@ -361,8 +351,7 @@ fn shade_deferred_impl<const SPECULAR: bool>(
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, touching);
 }
 
-#[spirv(compute(threads(256)))]
-pub fn shade_deferred_diffuse(
+specular_variants!(shade_deferred_diffuse, shade_deferred_specular, shade_deferred_impl, (
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
@@ -374,26 +363,7 @@ pub fn shade_deferred_diffuse(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
-) {
-    shade_deferred_impl::<false>(wg, nwg, local, p, depth, normals, albedo, lights, materials, frame, bounds);
-}
-
-#[spirv(compute(threads(256)))]
-pub fn shade_deferred_specular(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
-) {
-    shade_deferred_impl::<true>(wg, nwg, local, p, depth, normals, albedo, lights, materials, frame, bounds);
-}
+));
 
 /// Device-wide scan, step 3: add each workgroup's offset to its elements.
 #[spirv(compute(threads(256)))]

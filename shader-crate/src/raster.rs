@@ -92,10 +92,17 @@ pub fn gbuffer_fs(
     out_normal: &mut u32,
     out_albedo: &mut Vec4,
 ) {
+    write_targets(in_normal, front_facing, Vec3::ONE, draw, out_normal, out_albedo);
+}
+
+/// The G-buffer writes every fragment variant shares: the normal facing the viewed side,
+/// octahedral-encoded; albedo = material colour × `texel`, with the material index in alpha.
+#[inline]
+pub fn write_targets(in_normal: Vec3, front_facing: bool, texel: Vec3, draw: &DrawParams, out_normal: &mut u32, out_albedo: &mut Vec4) {
     // Two-sided surfaces: the normal faces the side being seen.
     let n = if front_facing { in_normal } else { -in_normal };
     *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
-    *out_albedo = Vec3::from_array(draw.albedo).extend(draw.material as f32 / 255.0);
+    *out_albedo = (Vec3::from_array(draw.albedo) * texel).extend(draw.material as f32 / 255.0);
 }
 
 /// The vertex shader of textured draws: as [`gbuffer_vs`] plus the texture coordinate.
@@ -128,10 +135,8 @@ pub fn gbuffer_fs_textured(
     out_normal: &mut u32,
     out_albedo: &mut Vec4,
 ) {
-    let n = if front_facing { in_normal } else { -in_normal };
-    let texel = sample_draw_uniform(albedo_map, in_uv);
-    *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
-    *out_albedo = (Vec3::from_array(draw.albedo) * texel.truncate()).extend(draw.material as f32 / 255.0);
+    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+    write_targets(in_normal, front_facing, texel, draw, out_normal, out_albedo);
 }
 
 /// Alpha-tested textured draws (Sponza's foliage and chains): fragments whose mask coverage is
@@ -152,8 +157,6 @@ pub fn gbuffer_fs_masked(
     if coverage.x < ALPHA_CUTOFF {
         spirv_std::arch::demote_to_helper_invocation();
     }
-    let n = if front_facing { in_normal } else { -in_normal };
-    let texel = sample_draw_uniform(albedo_map, in_uv);
-    *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
-    *out_albedo = (Vec3::from_array(draw.albedo) * texel.truncate()).extend(draw.material as f32 / 255.0);
+    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+    write_targets(in_normal, front_facing, texel, draw, out_normal, out_albedo);
 }
