@@ -52,6 +52,16 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     }
 }
 
+/// More lights than one lavapipe loop may iterate (65 535): the chunked light loops must still
+/// visit every light (lavapipe's loop limiter once cut them off silently).
+#[test]
+fn seventy_thousand_lights_all_visited() {
+    let gpu = common::gpu();
+    let scene = city();
+    let l = lights::uniform(&scene, 70_000, 13).unwrap();
+    assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
+}
+
 #[test]
 fn page_table_compaction_at_odd_resolutions() {
     let gpu = common::gpu();

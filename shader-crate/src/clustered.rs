@@ -173,6 +173,28 @@ pub fn compact_clusters(
     }
 }
 
+/// Lights handled per loop iteration. llvmpipe (lavapipe) stops an invocation's loops after
+/// 65 535 iterations in all (its loop limiter) and silently drops the rest; straight-line
+/// unrolling by 8 lets one invocation visit [`MAX_LIGHTS_PER_INVOCATION_LLVMPIPE`] lights there.
+pub const LIGHTS_PER_ITERATION: u32 = 8;
+/// The most lights one invocation can loop over on llvmpipe (the host refuses more there).
+pub const MAX_LIGHTS_PER_INVOCATION_LLVMPIPE: u32 = 65_535 * LIGHTS_PER_ITERATION;
+
+/// Runs `$body` eight times with `$u` = 0..8 as straight-line code (no loop, no closure:
+/// rust-gpu cannot legalise closures capturing other closures mutably).
+macro_rules! unroll8 {
+    ($u:ident => $body:block) => {{
+        { let $u = 0u32; $body }
+        { let $u = 1u32; $body }
+        { let $u = 2u32; $body }
+        { let $u = 3u32; $body }
+        { let $u = 4u32; $body }
+        { let $u = 5u32; $body }
+        { let $u = 6u32; $body }
+        { let $u = 7u32; $body }
+    }};
+}
+
 /// Lights of cluster `key` whose sphere meets its box (naive: all lights), in index order;
 /// returns the count and calls `emit(n, light)` for each.
 #[inline]
@@ -181,14 +203,19 @@ pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLi
     let (i, j, k) = g.unpack(key);
     let aabb = cluster_bounds::cluster_aabb(g, bounds, i, j, k);
     let mut n = 0;
-    let mut l = 0;
-    while l < p.num_lights {
-        let light = lights[l as usize];
-        if lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, &aabb) {
-            emit(n, l);
-            n += 1;
-        }
-        l += 1;
+    let mut base = 0;
+    while base < p.num_lights {
+        unroll8!(u => {
+            let l = base + u;
+            if l < p.num_lights {
+                let light = lights[l as usize];
+                if lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, &aabb) {
+                    emit(n, l);
+                    n += 1;
+                }
+            }
+        });
+        base += LIGHTS_PER_ITERATION;
     }
     n
 }
@@ -281,11 +308,16 @@ fn shade_clustered_impl<const SPECULAR: bool>(
     let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
     let (first, count) = (offsets[cluster], counts[cluster]);
     let mut sum = Vec3::ZERO;
-    let mut t = 0;
-    while t < count {
-        let light = lights[list[(first + t) as usize] as usize];
-        sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
-        t += 1;
+    let (mut base, end) = (first, first + count);
+    while base < end {
+        unroll8!(u => {
+            let t = base + u;
+            if t < end {
+                let light = lights[list[t as usize] as usize];
+                sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
+            }
+        });
+        base += LIGHTS_PER_ITERATION;
     }
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, count);
 }
@@ -339,14 +371,19 @@ fn shade_deferred_impl<const SPECULAR: bool>(
     let mat = materials[m as usize];
     let mut sum = Vec3::ZERO;
     let mut touching = 0;
-    let mut l = 0;
-    while l < p.num_lights {
-        let light = lights[l as usize];
-        if lighting::light_touches(&light, pos) {
-            sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
-            touching += 1;
-        }
-        l += 1;
+    let mut base = 0;
+    while base < p.num_lights {
+        unroll8!(u => {
+            let l = base + u;
+            if l < p.num_lights {
+                let light = lights[l as usize];
+                if lighting::light_touches(&light, pos) {
+                    sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, if SPECULAR { EFFECT_SPECULAR } else { 0 });
+                    touching += 1;
+                }
+            }
+        });
+        base += LIGHTS_PER_ITERATION;
     }
     frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, touching);
 }

@@ -125,6 +125,14 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
     }
     let ctx = &gpu.ctx;
+    let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
+    if ctx.info.driver_name.to_lowercase().contains("llvmpipe") && scene.lights.len() > max_lights as usize {
+        bail!(
+            "{} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \
+             can visit at most {max_lights} lights there (use fewer lights or a GPU)",
+            scene.lights.len()
+        );
+    }
     let n = s.width * s.height;
     let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
         .context("uploading geometry")?;

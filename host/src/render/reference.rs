@@ -2,12 +2,15 @@
 //! * keys recomputed from the G-buffer depth must equal the GPU's bit for bit;
 //! * the unique-cluster list must equal the sorted distinct keys;
 //! * every pixel's cluster list must contain every light whose range touches the pixel's
-//!   view-space position (`lighting::light_touches`) — conservative culling, no dropped light.
+//!   view-space position (`lighting::light_touches`) — conservative culling, no dropped light;
+//! * every cluster's light count must equal the CPU's count of lights meeting its box (the same
+//!   `clustered::for_each_cluster_light`), so no light is lost even where no pixel would show it.
 //!
 //! It also computes the statistics of the stats file (lights per cluster / per pixel).
 use super::Readback;
 use anyhow::{ensure, Result};
 use glam::Vec3;
+use shaders::clustered::for_each_cluster_light;
 use shaders::lighting::light_touches;
 use shaders::page_table::{pixel_key, unique_keys_reference, INVALID_KEY};
 use shaders::reconstruct::{distance_from_depth, view_position};
@@ -57,6 +60,26 @@ pub fn check(rb: &Readback) -> Result<()> {
         rb.unique.iter().take(4).collect::<Vec<_>>(),
         expected.iter().take(4).collect::<Vec<_>>()
     );
+    let params = shaders::layout::FrameParams {
+        grid: *g,
+        count: 0,
+        num_lights: rb.lights_view.len() as u32,
+        light_capacity: 0,
+        effects: 0,
+        normal_precision: 0,
+        view: 0,
+        exposure: 1.0,
+        heat_max: 0,
+    };
+    let bad_counts: Vec<(usize, u32, u32)> = rb
+        .unique
+        .iter()
+        .enumerate()
+        .map(|(c, &key)| (c, rb.counts[c], for_each_cluster_light(&params, &rb.bounds, &rb.lights_view, key, |_, _| {})))
+        .filter(|(_, gpu, cpu)| gpu != cpu)
+        .take(5)
+        .collect();
+    ensure!(bad_counts.is_empty(), "cluster light counts differ from the CPU's (cluster, gpu, cpu): {bad_counts:?}");
     let clusters = pixel_clusters(rb);
     let mut missing = Vec::new();
     for (i, cluster) in clusters.iter().enumerate() {
