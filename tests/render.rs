@@ -62,6 +62,23 @@ fn seventy_thousand_lights_all_visited() {
     assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
 }
 
+/// Every G-buffer normal precision renders, and clustered still equals deferred with it.
+#[test]
+fn normal_precisions() {
+    let gpu = common::gpu();
+    let scene = city();
+    let l = lights::uniform(&scene, 500, 17).unwrap();
+    for precision in [shaders::layout::PRECISION_OCT8, shaders::layout::PRECISION_OCT12, PRECISION_OCT16] {
+        let flat = flatten(&scene, precision).unwrap();
+        let input = scene_input(&scene, &flat, &l);
+        let s = |t| Settings { normal_precision: precision, ..settings(64, 36, t) };
+        let a = render::render(&gpu, &input, &s(Technique::Deferred)).unwrap();
+        let b = render::render(&gpu, &input, &s(Technique::ClusteredNaive)).unwrap();
+        assert_eq!(a.pixels, b.pixels, "precision {precision}");
+    }
+    common::assert_clean(&gpu);
+}
+
 #[test]
 fn page_table_compaction_at_odd_resolutions() {
     let gpu = common::gpu();

@@ -56,12 +56,34 @@ pub struct RenderArgs {
     pub seed: u64,
     #[arg(long, value_enum, default_value_t = View::Shaded)]
     pub view: View,
+    /// Octahedral encoding of the G-buffer normals (a 32-bit target: 2×8, 2×12 or 2×16 bits).
+    #[arg(long, value_enum, default_value_t = NormalPrecision::Oct16)]
+    pub normal_precision: NormalPrecision,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
+}
+
+/// G-buffer normal encodings (see `shaders::octahedral` for their error bounds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum NormalPrecision {
+    Oct8,
+    Oct12,
+    Oct16,
+}
+
+impl NormalPrecision {
+    pub fn code(self) -> u32 {
+        use shaders::layout::*;
+        match self {
+            Self::Oct8 => PRECISION_OCT8,
+            Self::Oct12 => PRECISION_OCT12,
+            Self::Oct16 => PRECISION_OCT16,
+        }
+    }
 }
 
 /// Merged geometry, materials and draws of a scene.
@@ -176,7 +198,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         scene.lights = lights::animate(&scene.lights, t);
     }
     scene.validate().context("scene")?;
-    let precision = shaders::layout::PRECISION_OCT16;
+    let precision = a.normal_precision.code();
     let flat = flatten(&scene, precision)?;
     let input = scene_input(&scene, &flat, &scene.lights);
     let settings = Settings {
