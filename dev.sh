@@ -62,13 +62,24 @@ case "$cmd" in
     test)
         shift
         # Every GPU test opens the Khronos validation layer with synchronization validation and
-        # fails on any message. Clippy must be clean too.
-        cargo test --workspace "$@"
-        if cargo clippy --version >/dev/null 2>&1 || rustup component add clippy >/dev/null 2>&1; then
-            cargo clippy --workspace --all-targets -- -D warnings
-        else
-            echo "dev.sh: clippy unavailable, lint skipped" >&2
+        # fails on any message. Clippy must be clean too. (No doc-test targets: there are none.)
+        log=$(mktemp)
+        set +e
+        cargo test --workspace --lib --bins --tests "$@" 2>&1 | tee "$log"
+        status=${PIPESTATUS[0]}
+        set -e
+        passed=$(grep -o '[0-9]* passed' "$log" | awk '{s += $1} END {print s + 0}')
+        failed=$(grep -o '[0-9]* failed' "$log" | awk '{s += $1} END {print s + 0}')
+        rm -f "$log"
+        if [ "$status" -eq 0 ]; then
+            if cargo clippy --version >/dev/null 2>&1 || rustup component add clippy >/dev/null 2>&1; then
+                cargo clippy --workspace --all-targets -- -D warnings || status=$?
+            else
+                echo "dev.sh: clippy unavailable, lint skipped" >&2
+            fi
         fi
+        echo "$passed passed, $failed failed"
+        exit "$status"
         ;;
     *)
         cargo build --release -p host
