@@ -26,6 +26,8 @@ pub struct Kernels {
     pub shade_deferred: [ComputePipeline<FrameParams>; 2],
     pub scan_add_offsets: ComputePipeline<ScanFixParams>,
     pub scan_store_total: ComputePipeline<ScanFixParams>,
+    pub radix_histogram: ComputePipeline<RadixParams>,
+    pub radix_scatter: ComputePipeline<RadixParams>,
 }
 
 impl Kernels {
@@ -54,6 +56,8 @@ impl Kernels {
             ],
             scan_add_offsets: ComputePipeline::new(ctx, &module, kernels::SCAN_ADD_OFFSETS)?,
             scan_store_total: ComputePipeline::new(ctx, &module, kernels::SCAN_STORE_TOTAL)?,
+            radix_histogram: ComputePipeline::new(ctx, &module, kernels::RADIX_HISTOGRAM)?,
+            radix_scatter: ComputePipeline::new(ctx, &module, kernels::RADIX_SCATTER)?,
         })
     }
 }

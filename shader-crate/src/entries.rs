@@ -4,7 +4,7 @@
 //! mismatch fails them).
 use crate::coop::gpu::GpuCoop;
 use crate::layout::*;
-use crate::{debug_view, octahedral, scan};
+use crate::{debug_view, octahedral, radix, scan};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
@@ -111,4 +111,63 @@ pub fn debug_view(
         return;
     }
     pixels[(gid.y * p.grid.width + gid.x) as usize] = debug_view::shade_pixel(p, slice_bounds, gid.x, gid.y);
+}
+
+/// Radix sort step 1 ([`crate::radix`]): per tile, the count of each digit (digit-major).
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_histogram(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; radix::RADIX_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] hist: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let g = wg.y * nwg.x + wg.x;
+    let i = g * radix::RADIX_TILE + local_index;
+    let d = if i < p.count { radix::digit(keys[i as usize], p.shift) } else { radix::NO_DIGIT };
+    let n = radix::tile_histogram(&c, shared, d);
+    if g < p.groups {
+        hist[(local_index * p.groups + g) as usize] = n;
+    }
+}
+
+/// Radix sort step 3: stable scatter to (digit, tile) start + rank within the tile.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_scatter(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; radix::RADIX_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] starts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys_out: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] values_out: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let g = wg.y * nwg.x + wg.x;
+    let i = g * radix::RADIX_TILE + local_index;
+    let valid = i < p.count;
+    let key = if valid { keys[i as usize] } else { 0 };
+    let d = if valid { radix::digit(key, p.shift) } else { radix::NO_DIGIT };
+    let rank = radix::tile_rank(&c, shared, d);
+    if valid {
+        let dst = (starts[(d * p.groups + g) as usize] + rank) as usize;
+        keys_out[dst] = key;
+        values_out[dst] = values[i as usize];
+    }
 }

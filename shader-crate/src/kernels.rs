@@ -59,3 +59,7 @@ pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_deferred_specular", 7);
 pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("clustered::scan_add_offsets", 2);
 pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("clustered::scan_store_total", 2, [1, 1, 1], false);
+
+// Radix sort (`entries.rs`, `radix.rs`): cooperative (workgroup barriers).
+pub const RADIX_HISTOGRAM: Kernel<RadixParams> = Kernel::new("entries::radix_histogram", 2, [256, 1, 1], true);
+pub const RADIX_SCATTER: Kernel<RadixParams> = Kernel::new("entries::radix_scatter", 5, [256, 1, 1], true);

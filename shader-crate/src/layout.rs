@@ -264,3 +264,17 @@ pub struct ScanFixParams {
     pub _pad: [u32; 2],
 }
 const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
+
+/// `radix_histogram` / `radix_scatter` kernels.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct RadixParams {
+    pub count: u32,
+    /// First bit of this pass's digit.
+    pub shift: u32,
+    /// Tiles: `⌈count / RADIX_TILE⌉` (the digit-major histogram's row length).
+    pub groups: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<RadixParams>() == 16);

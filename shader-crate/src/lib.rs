@@ -12,6 +12,7 @@
 //! * [`morton`] — 30/63-bit 3D Morton codes.
 //! * [`coop`] — the cooperative-kernel traits (GPU intrinsics / CPU lock-step emulation).
 //! * [`scan`] — subgroup/workgroup prefix sums.
+//! * [`radix`] — LSD radix sort (key–value) tile steps.
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 #![cfg_attr(target_arch = "spirv", no_std)]
@@ -34,6 +35,7 @@ pub mod lighting;
 pub mod morton;
 pub mod octahedral;
 pub mod page_table;
+pub mod radix;
 #[cfg(feature = "graphics")]
 pub mod raster;
 pub mod reconstruct;

@@ -17,6 +17,7 @@ pub mod legend;
 pub mod reference;
 pub mod resources;
 pub mod scan;
+pub mod sort;
 pub mod stats;
 
 use crate::gpu::Gpu;
