@@ -23,16 +23,21 @@ fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame
     render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
-/// Renders with both techniques and checks everything the pipeline issue asks for.
+/// Renders with the reference and both clustered techniques (naive and BVH) and checks
+/// everything the pipeline issues ask for; returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
-    let clustered = frame(gpu, scene, lights, &settings(w, h, Technique::ClusteredNaive));
     let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
-    let worst = reference.pixels.iter().zip(&clustered.pixels).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0);
-    assert!(worst <= 1, "{what}: clustered differs from deferred by {worst}/255");
-    reference::check(clustered.readback.as_ref().unwrap()).unwrap_or_else(|e| panic!("{what}: {e:#}"));
+    let mut frames = Vec::new();
+    for technique in [Technique::ClusteredNaive, Technique::ClusteredBvh] {
+        let clustered = frame(gpu, scene, lights, &settings(w, h, technique));
+        let worst = reference.pixels.iter().zip(&clustered.pixels).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0);
+        assert!(worst <= 1, "{what}, {technique:?}: differs from deferred by {worst}/255");
+        reference::check(clustered.readback.as_ref().unwrap()).unwrap_or_else(|e| panic!("{what}, {technique:?}: {e:#}"));
+        frames.push(clustered);
+    }
     common::assert_clean(gpu);
-    clustered
+    frames.swap_remove(0)
 }
 
 fn city() -> Scene {
@@ -107,6 +112,7 @@ fn hard_cases_stay_finite_and_equal() {
         ("zero radius", vec![light(at(10.0), 0.0), light(at(20.0), 0.0)]),
         ("radius larger than the scene", vec![light(at(30.0), 10.0 * diag)]),
         ("all lights at one point", (0..2000).map(|_| light(at(25.0), 15.0)).collect()),
+        ("10k lights at one point", (0..10_000).map(|_| light(at(40.0), 4.0)).collect()),
         ("zero lights", vec![]),
     ];
     for (what, l) in &cases {

@@ -28,6 +28,11 @@ pub struct Kernels {
     pub scan_store_total: ComputePipeline<ScanFixParams>,
     pub radix_histogram: ComputePipeline<RadixParams>,
     pub radix_scatter: ComputePipeline<RadixParams>,
+    pub light_keys: ComputePipeline<MortonParams>,
+    pub bvh_leaves: ComputePipeline<BvhParams>,
+    pub bvh_level: ComputePipeline<BvhParams>,
+    pub cluster_light_counts_bvh: ComputePipeline<FrameParams>,
+    pub cluster_light_fill_bvh: ComputePipeline<FrameParams>,
 }
 
 impl Kernels {
@@ -58,6 +63,11 @@ impl Kernels {
             scan_store_total: ComputePipeline::new(ctx, &module, kernels::SCAN_STORE_TOTAL)?,
             radix_histogram: ComputePipeline::new(ctx, &module, kernels::RADIX_HISTOGRAM)?,
             radix_scatter: ComputePipeline::new(ctx, &module, kernels::RADIX_SCATTER)?,
+            light_keys: ComputePipeline::new(ctx, &module, kernels::LIGHT_KEYS)?,
+            bvh_leaves: ComputePipeline::new(ctx, &module, kernels::BVH_LEAVES)?,
+            bvh_level: ComputePipeline::new(ctx, &module, kernels::BVH_LEVEL)?,
+            cluster_light_counts_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS_BVH)?,
+            cluster_light_fill_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL_BVH)?,
         })
     }
 }

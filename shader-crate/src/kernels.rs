@@ -63,3 +63,10 @@ pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("clustered::scan
 // Radix sort (`entries.rs`, `radix.rs`): cooperative (workgroup barriers).
 pub const RADIX_HISTOGRAM: Kernel<RadixParams> = Kernel::new("entries::radix_histogram", 2, [256, 1, 1], true);
 pub const RADIX_SCATTER: Kernel<RadixParams> = Kernel::new("entries::radix_scatter", 5, [256, 1, 1], true);
+
+// Clustered-BVH technique (`clustered_bvh.rs`).
+pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
+pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 3);
+pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
+pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_counts_bvh", 7);
+pub const CLUSTER_LIGHT_FILL_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_fill_bvh", 8);

@@ -278,3 +278,16 @@ pub struct RadixParams {
     pub _pad: u32,
 }
 const _: () = assert!(core::mem::size_of::<RadixParams>() == 16);
+
+/// Light-BVH kernels: `count` lights; the level being built and its node count.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct BvhParams {
+    pub count: u32,
+    pub level: u32,
+    /// Nodes of `level`.
+    pub nodes: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<BvhParams>() == 16);

@@ -22,15 +22,33 @@
 // bad input to a defined result; `clamp`/`contains` would change that (and `f32::clamp` asserts).
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_clamp, clippy::manual_range_contains)]
 
+/// Runs `$body` eight times with `$u` = 0..8 as straight-line code (no loop, no closure:
+/// rust-gpu cannot legalise closures capturing other closures mutably).
+macro_rules! unroll8 {
+    ($u:ident => $body:block) => {{
+        { let $u = 0u32; $body }
+        { let $u = 1u32; $body }
+        { let $u = 2u32; $body }
+        { let $u = 3u32; $body }
+        { let $u = 4u32; $body }
+        { let $u = 5u32; $body }
+        { let $u = 6u32; $body }
+        { let $u = 7u32; $body }
+    }};
+}
+
 pub mod cluster_bounds;
 pub mod cluster_key;
 #[cfg(feature = "compute")]
 pub mod clustered;
+#[cfg(feature = "compute")]
+pub mod clustered_bvh;
 pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]
 pub mod entries;
 pub mod layout;
+pub mod light_bvh;
 pub mod lighting;
 pub mod morton;
 pub mod octahedral;

@@ -12,6 +12,7 @@
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
+pub mod bvh;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
@@ -36,6 +37,9 @@ pub enum Technique {
     Deferred,
     /// Clustered deferred with unique clusters and naive (all-lights) assignment.
     ClusteredNaive,
+    /// Clustered deferred with lights Morton-sorted (GPU radix sort) into a 32-ary BVH that each
+    /// unique cluster traverses.
+    ClusteredBvh,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -183,7 +187,14 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                 }
             }
         }
-        Technique::ClusteredNaive => {
+        Technique::ClusteredNaive | Technique::ClusteredBvh => {
+            let bvh = match s.technique {
+                Technique::ClusteredBvh => Some(bvh::LightBvh::new(gpu, &lights_view).context("allocating the light BVH")?),
+                _ => None,
+            };
+            if let Some(b) = &bvh {
+                buffers.push(("light bvh".into(), b.bytes()));
+            }
             let mut caps = Capacities::initial(&grid, scene.lights.len() as u32);
             let mut cb = ClusterBuffers::new(gpu, &grid, caps)?;
             let mut f = 0;
@@ -192,7 +203,10 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                 p.light_capacity = caps.light_refs;
                 gpu.run(Some(&mut profiler), |rec| {
                     rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                    cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf)
+                    if let Some(b) = &bvh {
+                        b.record(gpu, rec, &lights)?;
+                    }
+                    cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf, bvh.as_ref())
                 })?;
                 let c: Vec<u32> = cb.counters.read(COUNTERS as usize)?;
                 (unique_clusters, light_refs, pages) =

@@ -110,7 +110,19 @@ impl ClusterBuffers {
 
     /// Records steps 2–5 (keys … shading) of the clustered chain.
     #[allow(clippy::too_many_arguments)]
-    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, p: &FrameParams, g: &Targets, bounds: &Buffer, lights: &Buffer, materials: &Buffer, frame: &Buffer) -> VkResult<()> {
+    /// With `bvh`, the assignment traverses the light BVH instead of testing every light.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        rec: &mut Recorder<'_>,
+        p: &FrameParams,
+        g: &Targets,
+        bounds: &Buffer,
+        lights: &Buffer,
+        materials: &Buffer,
+        frame: &Buffer,
+        bvh: Option<&super::bvh::LightBvh>,
+    ) -> VkResult<()> {
         let k = &gpu.kernels;
         let n = p.count;
         let with = |count: u32| FrameParams { count, ..*p };
@@ -129,9 +141,26 @@ impl ClusterBuffers {
         })?;
         let c = with(self.max_clusters);
         rec.pass("assignment", |rec| {
-            rec.dispatch_linear(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, self.max_clusters)?;
-            self.cluster_scan.record(gpu, rec, &self.counts, &self.offsets, self.max_clusters, Some((&self.counters, COUNTER_LIGHT_REFS)))?;
-            rec.dispatch_linear(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, self.max_clusters)
+            let m = self.max_clusters;
+            match bvh {
+                None => rec.dispatch_linear(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, m)?,
+                Some(b) => rec.dispatch_linear(
+                    &k.cluster_light_counts_bvh,
+                    &[&self.unique, &self.counters, bounds, lights, &self.counts, &b.order, &b.nodes],
+                    &c,
+                    m,
+                )?,
+            }
+            self.cluster_scan.record(gpu, rec, &self.counts, &self.offsets, m, Some((&self.counters, COUNTER_LIGHT_REFS)))?;
+            match bvh {
+                None => rec.dispatch_linear(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, m),
+                Some(b) => rec.dispatch_linear(
+                    &k.cluster_light_fill_bvh,
+                    &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list, &b.order, &b.nodes],
+                    &c,
+                    m,
+                ),
+            }
         })?;
         rec.pass("shading", |rec| {
             rec.dispatch_linear(

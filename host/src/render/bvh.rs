@@ -1,0 +1,80 @@
+//! The light BVH of `clustered-bvh` (`shaders::light_bvh`): Morton keys of the view-space lights
+//! → GPU radix sort (key = 30-bit Morton code, value = light index) → node boxes built level by
+//! level, bottom-up. Memory: 4 B keys + 4 B order per light, sort scratch, ≈ 1 B per light of
+//! nodes (32 B per 32 lights, plus the levels above).
+use super::sort::RadixSort;
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, Recorder, VkResult};
+use shaders::layout::{BvhParams, MortonParams, PointLight};
+use shaders::light_bvh::{level_count, level_nodes, level_offset};
+use shaders::morton::{MortonQuantizer, MORTON30_BITS, MORTON63_BITS};
+
+pub struct LightBvh {
+    pub n: u32,
+    keys: Buffer,
+    pub order: Buffer,
+    pub nodes: Buffer,
+    sort: RadixSort,
+    quantizers: MortonParams,
+}
+
+impl LightBvh {
+    /// Buffers for `lights` (view space: the quantiser spans their positions).
+    pub fn new(gpu: &Gpu, lights: &[PointLight]) -> VkResult<Self> {
+        let n = lights.len() as u32;
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for l in lights {
+            for a in 0..3 {
+                lo[a] = lo[a].min(l.position[a]);
+                hi[a] = hi[a].max(l.position[a]);
+            }
+        }
+        if lights.is_empty() {
+            (lo, hi) = ([0.0; 3], [1.0; 3]);
+        }
+        let nodes: u32 = (0..level_count(n.max(1))).map(|l| level_nodes(n.max(1), l)).sum();
+        let ctx = &gpu.ctx;
+        Ok(Self {
+            n,
+            keys: Buffer::storage(ctx, "light Morton keys", 4 * n as u64)?,
+            order: Buffer::storage(ctx, "light order", 4 * n as u64)?,
+            nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
+            sort: RadixSort::new(gpu, n.max(1))?,
+            quantizers: MortonParams {
+                q30: MortonQuantizer::new(lo, hi, MORTON30_BITS),
+                q63: MortonQuantizer::new(lo, hi, MORTON63_BITS),
+                count: n,
+                _pad: [0; 3],
+            },
+        })
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.keys.size + self.order.size + self.nodes.size
+    }
+
+    /// Records key generation + sort ("light sort") and the level-by-level build ("bvh build").
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, lights: &Buffer) -> VkResult<()> {
+        let k = &gpu.kernels;
+        let n = self.n;
+        if n == 0 {
+            return Ok(());
+        }
+        rec.pass("light sort", |rec| {
+            rec.dispatch_linear(&k.light_keys, &[lights, &self.keys, &self.order], &self.quantizers, n)?;
+            self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS)
+        })?;
+        rec.pass("bvh build", |rec| {
+            let leaves = level_nodes(n, 0);
+            let p = BvhParams { count: n, level: 0, nodes: leaves, _pad: 0 };
+            rec.dispatch_linear(&k.bvh_leaves, &[lights, &self.order, &self.nodes], &p, leaves)?;
+            for level in 1..level_count(n) {
+                let nodes = level_nodes(n, level);
+                let p = BvhParams { count: n, level, nodes, _pad: 0 };
+                debug_assert!(level_offset(n, level) > 0);
+                rec.dispatch_linear(&k.bvh_level, &[&self.nodes], &p, nodes)?;
+            }
+            Ok(())
+        })
+    }
+}
