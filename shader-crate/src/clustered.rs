@@ -183,13 +183,18 @@ pub const LIGHTS_PER_ITERATION: u32 = 8;
 pub const MAX_LIGHTS_PER_INVOCATION_LLVMPIPE: u32 = 400_000;
 
 
+/// The view-space box of the cluster with key `key` (both light searches test against it).
+#[inline]
+pub fn cluster_box(p: &FrameParams, bounds: &[f32], key: u32) -> ClusterAabb {
+    let (i, j, k) = p.grid.unpack(key);
+    cluster_bounds::cluster_aabb(&p.grid, bounds, i, j, k)
+}
+
 /// Lights of cluster `key` whose sphere meets its box (naive: all lights), in index order;
 /// returns the count and calls `emit(n, light)` for each.
 #[inline]
 pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLight], key: u32, mut emit: impl FnMut(u32, u32)) -> u32 {
-    let g = &p.grid;
-    let (i, j, k) = g.unpack(key);
-    let aabb = cluster_bounds::cluster_aabb(g, bounds, i, j, k);
+    let aabb = cluster_box(p, bounds, key);
     let mut n = 0;
     let mut base = 0;
     while base < p.num_lights {

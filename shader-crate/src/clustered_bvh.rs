@@ -1,9 +1,8 @@
 //! Entry points of the `clustered-bvh` technique: Morton keys of the lights, the light BVH build
 //! (one dispatch per level, bottom-up) and the traversal-based light assignment, which replaces
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
-use crate::clustered::linear_index;
+use crate::clustered::{cluster_box, linear_index};
 use crate::layout::*;
-use crate::cluster_bounds;
 use crate::light_bvh;
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -70,10 +69,7 @@ pub fn for_each_cluster_light_bvh(
     key: u32,
     emit: impl FnMut(u32, u32),
 ) -> u32 {
-    let g = &p.grid;
-    let (i, j, k) = g.unpack(key);
-    let aabb = cluster_bounds::cluster_aabb(g, bounds, i, j, k);
-    light_bvh::for_each_bvh_light(nodes, lights, order, p.num_lights, &aabb, emit)
+    light_bvh::for_each_bvh_light(nodes, lights, order, p.num_lights, &cluster_box(p, bounds, key), emit)
 }
 
 /// Step 3, pass 1: lights per unique cluster.

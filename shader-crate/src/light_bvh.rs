@@ -126,13 +126,27 @@ pub fn for_each_bvh_light(
         return 0;
     }
     let levels = level_count(n);
+    // Per-level node counts and buffer offsets, once: the walk itself must not loop over levels
+    // at every node (cost, and llvmpipe's loop limiter counts every iteration).
+    let mut count = [0u32; BVH_MAX_LEVELS as usize];
+    let mut offset = [0u32; BVH_MAX_LEVELS as usize];
+    let mut m = n;
+    let mut acc = 0;
+    let mut l = 0;
+    while l < levels {
+        m = m.div_ceil(BVH_BRANCHING);
+        count[l as usize] = m;
+        offset[l as usize] = acc;
+        acc += m;
+        l += 1;
+    }
     // cursor[l]: next node to visit at level l; end[l]: one past the last node of the current
     // parent's children at level l.
     let mut cursor = [0u32; BVH_MAX_LEVELS as usize];
     let mut end = [0u32; BVH_MAX_LEVELS as usize];
     let top = levels - 1;
     cursor[top as usize] = 0;
-    end[top as usize] = level_nodes(n, top);
+    end[top as usize] = count[top as usize];
     let mut level = top;
     let mut found = 0;
     loop {
@@ -146,7 +160,7 @@ pub fn for_each_bvh_light(
         }
         let node = cursor[l];
         cursor[l] += 1;
-        if !boxes_overlap(&nodes[(level_offset(n, level) + node) as usize], cluster) {
+        if !boxes_overlap(&nodes[(offset[l] + node) as usize], cluster) {
             continue;
         }
         if level == 0 {
@@ -169,7 +183,7 @@ pub fn for_each_bvh_light(
             }
         } else {
             let below = level - 1;
-            let children = level_nodes(n, below);
+            let children = count[below as usize];
             let first = node * BVH_BRANCHING;
             cursor[below as usize] = first;
             end[below as usize] = if first + BVH_BRANCHING < children { first + BVH_BRANCHING } else { children };
