@@ -51,6 +51,7 @@ fn bvh(c: &mut Criterion) {
                 exposure: 1.0,
                 frames: 1,
                 read_back: false,
+                bvh_branching: 0,
             };
             g.bench_function(BenchmarkId::new(format!("{t:?}"), n), |b| {
                 b.iter_custom(|iters| {

@@ -15,7 +15,7 @@ fn assets() -> PathBuf {
 }
 
 fn settings(w: u32, h: u32, technique: Technique) -> Settings {
-    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true }
+    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0 }
 }
 
 fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
@@ -23,17 +23,19 @@ fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame
     render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
-/// Renders with the reference and both clustered techniques (naive and BVH) and checks
+/// Renders with the reference and both clustered techniques (naive, and BVH at branchings 32 and
+/// 64) and checks
 /// everything the pipeline issues ask for; returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
     let mut frames = Vec::new();
-    for technique in [Technique::ClusteredNaive, Technique::ClusteredBvh] {
-        let clustered = frame(gpu, scene, lights, &settings(w, h, technique));
+    for (technique, branching) in [(Technique::ClusteredNaive, 0), (Technique::ClusteredBvh, 32), (Technique::ClusteredBvh, 64)] {
+        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, ..settings(w, h, technique) });
         let worst = reference.pixels.iter().zip(&clustered.pixels).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0);
-        assert!(worst <= 1, "{what}, {technique:?}: differs from deferred by {worst}/255");
-        reference::check(clustered.readback.as_ref().unwrap()).unwrap_or_else(|e| panic!("{what}, {technique:?}: {e:#}"));
+        assert!(worst <= 1, "{what}, {technique:?} (branching {branching}): differs from deferred by {worst}/255");
+        reference::check(clustered.readback.as_ref().unwrap())
+            .unwrap_or_else(|e| panic!("{what}, {technique:?} (branching {branching}): {e:#}"));
         frames.push(clustered);
     }
     common::assert_clean(gpu);

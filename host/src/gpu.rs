@@ -31,8 +31,8 @@ pub struct Kernels {
     pub light_keys: ComputePipeline<MortonParams>,
     pub bvh_leaves: ComputePipeline<BvhParams>,
     pub bvh_level: ComputePipeline<BvhParams>,
-    pub cluster_light_counts_bvh: ComputePipeline<FrameParams>,
-    pub cluster_light_fill_bvh: ComputePipeline<FrameParams>,
+    pub cluster_light_counts_bvh: ComputePipeline<BvhAssignParams>,
+    pub cluster_light_fill_bvh: ComputePipeline<BvhAssignParams>,
 }
 
 impl Kernels {

@@ -59,6 +59,10 @@ pub struct RenderArgs {
     /// Octahedral encoding of the G-buffer normals (a 32-bit target: 2×8, 2×12 or 2×16 bits).
     #[arg(long, value_enum, default_value_t = NormalPrecision::Oct16)]
     pub normal_precision: NormalPrecision,
+    /// Children per light-BVH node for `clustered-bvh`: 32 or 64 (default: the subgroup width,
+    /// clamped to 32..=64).
+    #[arg(long, value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["32", "64"]), |s: String| s.parse::<u32>().unwrap_or(0)))]
+    pub bvh_branching: Option<u32>,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -211,6 +215,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         exposure: 1.0,
         frames: a.frames,
         read_back: a.stats.is_some(),
+        bvh_branching: a.bvh_branching.unwrap_or(0),
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

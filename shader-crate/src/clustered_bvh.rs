@@ -1,7 +1,10 @@
 //! Entry points of the `clustered-bvh` technique: Morton keys of the lights, the light BVH build
-//! (one dispatch per level, bottom-up) and the traversal-based light assignment, which replaces
+//! (one dispatch per level, bottom-up) and the traversal-based light assignment (one subgroup per
+//! unique cluster, [`light_bvh::walk_subgroup`]), which replaces
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
 use crate::clustered::{cluster_box, linear_index};
+use crate::coop::gpu::GpuCoop;
+use crate::coop::Coop;
 use crate::layout::*;
 use crate::light_bvh;
 use spirv_std::glam::UVec3;
@@ -38,7 +41,7 @@ pub fn bvh_leaves(
 ) {
     let node = linear_index(wg, nwg, local);
     if node < p.nodes {
-        nodes[node as usize] = light_bvh::leaf_node_box(lights, order, p.count, node);
+        nodes[node as usize] = light_bvh::leaf_node_box(lights, order, p.count, p.branching, node);
     }
 }
 
@@ -53,15 +56,24 @@ pub fn bvh_level(
 ) {
     let node = linear_index(wg, nwg, local);
     if node < p.nodes {
-        let b = light_bvh::inner_node_box(nodes, p.count, p.level, node);
-        nodes[(light_bvh::level_offset(p.count, p.level) + node) as usize] = b;
+        let b = light_bvh::inner_node_box(nodes, p.count, p.branching, p.level, node);
+        nodes[(light_bvh::level_offset(p.count, p.level, p.branching) + node) as usize] = b;
     }
 }
 
-/// Lights of cluster `key` by BVH traversal (count, and `emit(k, light)` per light).
+/// Unique cluster handled by this subgroup.
 #[inline]
-pub fn for_each_cluster_light_bvh(
-    p: &FrameParams,
+pub fn walk_cluster<C: Coop>(c: &C, wg: UVec3, nwg: UVec3) -> u32 {
+    (wg.y * nwg.x + wg.x) * c.num_subgroups() + c.subgroup_id()
+}
+
+/// Lights of cluster `key` by the subgroup-parallel BVH walk (count on every lane; `emit(k,
+/// light)` on the lanes that found a light).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn cluster_lights_bvh<C: Coop>(
+    c: &C,
+    p: &BvhAssignParams,
     bounds: &[f32],
     lights: &[PointLight],
     order: &[u32],
@@ -69,17 +81,22 @@ pub fn for_each_cluster_light_bvh(
     key: u32,
     emit: impl FnMut(u32, u32),
 ) -> u32 {
-    light_bvh::for_each_bvh_light(nodes, lights, order, p.num_lights, &cluster_box(p, bounds, key), emit)
+    let f = &p.frame;
+    light_bvh::walk_subgroup(c, nodes, lights, order, f.num_lights, p.branching, &cluster_box(f, bounds, key), emit)
 }
 
-/// Step 3, pass 1: lights per unique cluster.
-#[spirv(compute(threads(256)))]
+/// Step 3, pass 1: lights per unique cluster (one subgroup each).
+#[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
 pub fn cluster_light_counts_bvh(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &BvhAssignParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
@@ -88,25 +105,33 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] nodes: &[ClusterAabb],
 ) {
-    let c = linear_index(wg, nwg, local);
-    if c >= p.count {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let cl = walk_cluster(&c, wg, nwg);
+    if cl >= p.frame.count {
         return;
     }
-    counts[c as usize] = if c < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        for_each_cluster_light_bvh(p, bounds, lights, order, nodes, unique[c as usize], |_, _| {})
+    let n = if cl < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
+        cluster_lights_bvh(&c, p, bounds, lights, order, nodes, unique[cl as usize], |_, _| {})
     } else {
         0
     };
+    if lane == 0 {
+        counts[cl as usize] = n;
+    }
 }
 
-/// Step 3, pass 2: each cluster's light indices at its offset.
-#[spirv(compute(threads(256)))]
+/// Step 3, pass 2: each cluster's light indices at its offset (one subgroup each).
+#[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
 pub fn cluster_light_fill_bvh(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &BvhAssignParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
@@ -116,13 +141,14 @@ pub fn cluster_light_fill_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] nodes: &[ClusterAabb],
 ) {
-    let c = linear_index(wg, nwg, local);
-    if c >= p.count || c >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let cl = walk_cluster(&c, wg, nwg);
+    if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }
-    if counters[COUNTER_LIGHT_REFS as usize] > p.light_capacity {
+    if counters[COUNTER_LIGHT_REFS as usize] > p.frame.light_capacity {
         return;
     }
-    let base = offsets[c as usize];
-    for_each_cluster_light_bvh(p, bounds, lights, order, nodes, unique[c as usize], |n, l| list[(base + n) as usize] = l);
+    let base = offsets[cl as usize];
+    cluster_lights_bvh(&c, p, bounds, lights, order, nodes, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
 }

@@ -68,5 +68,8 @@ pub const RADIX_SCATTER: Kernel<RadixParams> = Kernel::new("entries::radix_scatt
 pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
 pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 3);
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
-pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_counts_bvh", 7);
-pub const CLUSTER_LIGHT_FILL_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_fill_bvh", 8);
+/// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
+pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 7, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 8, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);

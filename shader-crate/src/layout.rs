@@ -288,6 +288,20 @@ pub struct BvhParams {
     pub level: u32,
     /// Nodes of `level`.
     pub nodes: u32,
-    pub _pad: u32,
+    /// Children per node (32 or 64: `light_bvh::valid_branching`).
+    pub branching: u32,
 }
 const _: () = assert!(core::mem::size_of::<BvhParams>() == 16);
+
+/// Push constants of the BVH light assignment: the frame's parameters plus the tree's branching.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct BvhAssignParams {
+    pub frame: FrameParams,
+    /// Children per node of the light BVH (32 or 64).
+    pub branching: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
+const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);

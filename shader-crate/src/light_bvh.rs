@@ -1,31 +1,54 @@
 //! Light BVH over Morton-sorted lights (Karas' design; the tree of "Clustered deferred and forward
 //! shading", Olsson et al. 2012, §4.2): leaves are the sorted lights; node `n` of level 0 bounds
 //! lights `[B·n, B·n + B)`, node `n` of level ℓ bounds nodes `[B·n, B·n + B)` of level ℓ − 1, up
-//! to a top level of at most `B` nodes. `B` = [`BVH_BRANCHING`] = 32. The tree is implicit
-//! (children are consecutive), so a node is just its AABB (32 B); levels are stored bottom-up in
-//! one buffer at offsets `level_offset(ℓ)`. Memory: 32 B × (N/32 + N/1024 + …) ≈ N B.
+//! to a top level of at most `B` nodes. The branching `B` is 32 or 64 ([`valid_branching`]; the
+//! host's default is the subgroup width clamped to that range, so one subgroup tests one node's
+//! children in one or two steps). The tree is implicit (children are consecutive), so a node is
+//! just its AABB (32 B); levels are stored bottom-up in one buffer at offsets
+//! `level_offset(ℓ)`. Memory: 32 B × (N/B + N/B² + …) ≈ N B (B = 32) or N/2 B (B = 64).
 //!
-//! Traversal per cluster ([`for_each_bvh_light`]) is a stackless depth-first walk: one cursor per
-//! level; a node whose box misses the cluster box is skipped with its subtree. A light meets the
-//! cluster exactly when its sphere does (the same `sphere_intersects_aabb` as the naive search),
-//! and every ancestor box contains the light's sphere box, so the lists equal the naive lists as
-//! sets (in Morton order instead of index order).
+//! Two walks find the lights of one cluster box, both depth-first and stackless (one cursor or
+//! one child mask per level, at most [`BVH_MAX_LEVELS`]):
+//! * [`for_each_bvh_light`] — one invocation per cluster, children tested one after the other.
+//!   It is the CPU reference of the walk.
+//! * [`walk_subgroup`] — one *subgroup* per cluster (the GPU's walk): the lanes test the
+//!   children of a node in parallel, a ballot gives the mask of children to visit, the walk pops
+//!   them lowest first; at a leaf node the lanes test its lights in parallel and the voting lanes
+//!   write their light at `found + ballot_rank`. Every lane ends with the same count.
+//!
+//! A light meets the cluster exactly when its sphere does (the same `sphere_intersects_aabb` as
+//! the naive search), and every ancestor box contains the light's sphere box, so both walks give
+//! the naive lists as sets (in Morton order instead of index order).
+use crate::coop::{ballot_count, ballot_rank, Coop};
 use crate::layout::{ClusterAabb, PointLight};
 use crate::lighting;
 use spirv_std::glam::Vec3;
 
-/// Children per node.
-pub const BVH_BRANCHING: u32 = 32;
+/// The branchings the tree supports.
+pub const BVH_BRANCHINGS: [u32; 2] = [32, 64];
+/// Largest branching: a node's child mask fits two 32-bit words.
+pub const BVH_MAX_BRANCHING: u32 = 64;
 /// Levels supported (32^6 > 10^9 lights).
 pub const BVH_MAX_LEVELS: u32 = 6;
 
+/// Invocations per workgroup of the assignment: `WALK_WORKGROUP / subgroup width` clusters per
+/// workgroup (the host dispatches for the device's largest subgroup width, so every cluster is
+/// covered whatever width the driver picks; surplus subgroups find no cluster and return).
+pub const WALK_WORKGROUP: u32 = 64;
+
+/// Whether `b` is a supported branching (32 or 64).
+#[inline]
+pub fn valid_branching(b: u32) -> bool {
+    b == 32 || b == 64
+}
+
 /// Nodes of level `level` for `n` lights: `⌈n / B^(level+1)⌉`.
 #[inline]
-pub fn level_nodes(n: u32, level: u32) -> u32 {
+pub fn level_nodes(n: u32, level: u32, b: u32) -> u32 {
     let mut m = n;
     let mut l = 0;
     while l <= level {
-        m = m.div_ceil(BVH_BRANCHING);
+        m = m.div_ceil(b);
         l += 1;
     }
     m
@@ -33,9 +56,9 @@ pub fn level_nodes(n: u32, level: u32) -> u32 {
 
 /// Levels of the tree over `n` lights (≥ 1 for n ≥ 1): until a level has at most B nodes.
 #[inline]
-pub fn level_count(n: u32) -> u32 {
+pub fn level_count(n: u32, b: u32) -> u32 {
     let mut levels = 1;
-    while level_nodes(n, levels - 1) > BVH_BRANCHING && levels < BVH_MAX_LEVELS {
+    while level_nodes(n, levels - 1, b) > b && levels < BVH_MAX_LEVELS {
         levels += 1;
     }
     levels
@@ -43,14 +66,49 @@ pub fn level_count(n: u32) -> u32 {
 
 /// First node of level `level` in the node buffer.
 #[inline]
-pub fn level_offset(n: u32, level: u32) -> u32 {
+pub fn level_offset(n: u32, level: u32, b: u32) -> u32 {
     let mut off = 0;
     let mut l = 0;
     while l < level {
-        off += level_nodes(n, l);
+        off += level_nodes(n, l, b);
         l += 1;
     }
     off
+}
+
+/// Nodes of the whole tree (the node buffer's length).
+#[inline]
+pub fn total_nodes(n: u32, b: u32) -> u32 {
+    level_offset(n, level_count(n, b), b)
+}
+
+/// Per-level node counts and buffer offsets, computed once per walk: the walk itself must not
+/// loop over levels at every node (cost, and llvmpipe's loop limiter counts every iteration).
+#[derive(Clone, Copy)]
+pub struct Levels {
+    pub levels: u32,
+    pub count: [u32; BVH_MAX_LEVELS as usize],
+    pub offset: [u32; BVH_MAX_LEVELS as usize],
+}
+
+impl Levels {
+    #[inline]
+    pub fn new(n: u32, b: u32) -> Self {
+        let levels = level_count(n, b);
+        let mut count = [0u32; BVH_MAX_LEVELS as usize];
+        let mut offset = [0u32; BVH_MAX_LEVELS as usize];
+        let mut m = n;
+        let mut acc = 0;
+        let mut l = 0;
+        while l < levels {
+            m = m.div_ceil(b);
+            count[l as usize] = m;
+            offset[l as usize] = acc;
+            acc += m;
+            l += 1;
+        }
+        Self { levels, count, offset }
+    }
 }
 
 /// Box of a light's sphere.
@@ -85,68 +143,63 @@ pub fn boxes_overlap(a: &ClusterAabb, b: &ClusterAabb) -> bool {
 
 /// Box of level-0 node `node`: its lights (sorted order; `order[s]` is the light index).
 #[inline]
-pub fn leaf_node_box(lights: &[PointLight], order: &[u32], n: u32, node: u32) -> ClusterAabb {
-    let mut b = EMPTY_BOX;
-    let first = node * BVH_BRANCHING;
+pub fn leaf_node_box(lights: &[PointLight], order: &[u32], n: u32, b: u32, node: u32) -> ClusterAabb {
+    let mut bx = EMPTY_BOX;
+    let first = node * b;
     let mut s = first;
-    while s < first + BVH_BRANCHING && s < n {
-        b = union(&b, &light_box(&lights[order[s as usize] as usize]));
+    while s < first + b && s < n {
+        bx = union(&bx, &light_box(&lights[order[s as usize] as usize]));
         s += 1;
     }
-    b
+    bx
 }
 
 /// Box of node `node` of level `level ≥ 1` from its children in `nodes`.
 #[inline]
-pub fn inner_node_box(nodes: &[ClusterAabb], n: u32, level: u32, node: u32) -> ClusterAabb {
-    let children = level_nodes(n, level - 1);
-    let base = level_offset(n, level - 1);
-    let mut b = EMPTY_BOX;
-    let first = node * BVH_BRANCHING;
+pub fn inner_node_box(nodes: &[ClusterAabb], n: u32, b: u32, level: u32, node: u32) -> ClusterAabb {
+    let children = level_nodes(n, level - 1, b);
+    let base = level_offset(n, level - 1, b);
+    let mut bx = EMPTY_BOX;
+    let first = node * b;
     let mut c = first;
-    while c < first + BVH_BRANCHING && c < children {
-        b = union(&b, &nodes[(base + c) as usize]);
+    while c < first + b && c < children {
+        bx = union(&bx, &nodes[(base + c) as usize]);
         c += 1;
     }
-    b
+    bx
 }
 
-/// Lights (indices, via `order`) whose sphere meets `cluster`, found by walking the tree; calls
-/// `emit(k, light)` for the k-th one and returns the count.
+/// Whether light `s` of the sorted order meets `cluster`.
 #[inline]
+fn light_hits(lights: &[PointLight], order: &[u32], s: u32, cluster: &ClusterAabb) -> bool {
+    let light = lights[order[s as usize] as usize];
+    lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, cluster)
+}
+
+/// Lights (indices, via `order`) whose sphere meets `cluster`, found by walking the tree with one
+/// invocation; calls `emit(k, light)` for the k-th one and returns the count.
+#[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn for_each_bvh_light(
     nodes: &[ClusterAabb],
     lights: &[PointLight],
     order: &[u32],
     n: u32,
+    b: u32,
     cluster: &ClusterAabb,
     mut emit: impl FnMut(u32, u32),
 ) -> u32 {
     if n == 0 {
         return 0;
     }
-    let levels = level_count(n);
-    // Per-level node counts and buffer offsets, once: the walk itself must not loop over levels
-    // at every node (cost, and llvmpipe's loop limiter counts every iteration).
-    let mut count = [0u32; BVH_MAX_LEVELS as usize];
-    let mut offset = [0u32; BVH_MAX_LEVELS as usize];
-    let mut m = n;
-    let mut acc = 0;
-    let mut l = 0;
-    while l < levels {
-        m = m.div_ceil(BVH_BRANCHING);
-        count[l as usize] = m;
-        offset[l as usize] = acc;
-        acc += m;
-        l += 1;
-    }
+    let t = Levels::new(n, b);
     // cursor[l]: next node to visit at level l; end[l]: one past the last node of the current
     // parent's children at level l.
     let mut cursor = [0u32; BVH_MAX_LEVELS as usize];
     let mut end = [0u32; BVH_MAX_LEVELS as usize];
-    let top = levels - 1;
+    let top = t.levels - 1;
     cursor[top as usize] = 0;
-    end[top as usize] = count[top as usize];
+    end[top as usize] = t.count[top as usize];
     let mut level = top;
     let mut found = 0;
     loop {
@@ -160,116 +213,158 @@ pub fn for_each_bvh_light(
         }
         let node = cursor[l];
         cursor[l] += 1;
-        if !boxes_overlap(&nodes[(offset[l] + node) as usize], cluster) {
+        if !boxes_overlap(&nodes[(t.offset[l] + node) as usize], cluster) {
             continue;
         }
         if level == 0 {
-            let first = node * BVH_BRANCHING;
-            let last = if first + BVH_BRANCHING < n { first + BVH_BRANCHING } else { n };
+            let first = node * b;
+            let last = if first + b < n { first + b } else { n };
             // 8 lights per iteration: llvmpipe's loop limiter (see `clustered`).
             let mut s0 = first;
             while s0 < last {
                 unroll8!(u => {
                     let s = s0 + u;
-                    if s < last {
-                        let light = lights[order[s as usize] as usize];
-                        if lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, cluster) {
-                            emit(found, order[s as usize]);
-                            found += 1;
-                        }
+                    if s < last && light_hits(lights, order, s, cluster) {
+                        emit(found, order[s as usize]);
+                        found += 1;
                     }
                 });
                 s0 += 8;
             }
         } else {
             let below = level - 1;
-            let children = count[below as usize];
-            let first = node * BVH_BRANCHING;
+            let children = t.count[below as usize];
+            let first = node * b;
             cursor[below as usize] = first;
-            end[below as usize] = if first + BVH_BRANCHING < children { first + BVH_BRANCHING } else { children };
+            end[below as usize] = if first + b < children { first + b } else { children };
             level = below;
         }
     }
     found
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn contains(outer: &ClusterAabb, inner: &ClusterAabb) -> bool {
-        (0..3).all(|a| outer.min[a] <= inner.min[a] && inner.max[a] <= outer.max[a])
-    }
-
-    /// Builds the tree on the CPU with the kernels' functions.
-    fn build(lights: &[PointLight], order: &[u32]) -> Vec<ClusterAabb> {
-        let n = lights.len() as u32;
-        let total: u32 = (0..level_count(n)).map(|l| level_nodes(n, l)).sum();
-        let mut nodes = vec![EMPTY_BOX; total as usize];
-        for node in 0..level_nodes(n, 0) {
-            nodes[node as usize] = leaf_node_box(lights, order, n, node);
-        }
-        for level in 1..level_count(n) {
-            for node in 0..level_nodes(n, level) {
-                let b = inner_node_box(&nodes, n, level, node);
-                nodes[(level_offset(n, level) + node) as usize] = b;
-            }
-        }
-        nodes
-    }
-
-    fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
-        let mut x = seed | 1;
-        let mut r = move || {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            (x >> 8) as f32 / (1u32 << 24) as f32
-        };
-        (0..n)
-            .map(|_| PointLight { position: [r() * 100.0, r() * 20.0, -r() * 100.0], radius: radius * r(), colour: [1.0; 3], intensity: 1.0 })
-            .collect()
-    }
-
-    /// Every node's box contains its children's (down to the lights' sphere boxes), at sizes that
-    /// give 1, 2 and 3 levels and partial last nodes; traversal finds exactly the brute-force set.
-    #[test]
-    fn nodes_contain_children_and_traversal_equals_brute_force() {
-        for (n, radius) in [(1usize, 3.0), (31, 3.0), (33, 0.0), (1025, 5.0), (40_000, 2.0), (3000, 500.0)] {
-            let ls = lights(n, n as u32, radius);
-            let order: Vec<u32> = (0..n as u32).rev().collect(); // any permutation is a valid order
-            let nodes = build(&ls, &order);
-            let nn = n as u32;
-            for node in 0..level_nodes(nn, 0) {
-                let b = nodes[node as usize];
-                for s in node * BVH_BRANCHING..((node + 1) * BVH_BRANCHING).min(nn) {
-                    assert!(contains(&b, &light_box(&ls[order[s as usize] as usize])), "n={n}: leaf node {node}");
-                }
-            }
-            for level in 1..level_count(nn) {
-                for node in 0..level_nodes(nn, level) {
-                    let b = nodes[(level_offset(nn, level) + node) as usize];
-                    let below = level_offset(nn, level - 1);
-                    for c in node * BVH_BRANCHING..((node + 1) * BVH_BRANCHING).min(level_nodes(nn, level - 1)) {
-                        assert!(contains(&b, &nodes[(below + c) as usize]), "n={n}: level {level} node {node}");
-                    }
-                }
-            }
-            assert!(level_nodes(nn, level_count(nn) - 1) <= BVH_BRANCHING);
-            for (i, c) in lights(64, 7, 15.0).iter().enumerate() {
-                let cluster = light_box(c);
-                let mut got = Vec::new();
-                let count = for_each_bvh_light(&nodes, &ls, &order, nn, &cluster, |_, l| got.push(l));
-                got.sort_unstable();
-                let expected: Vec<u32> = (0..nn)
-                    .filter(|&l| {
-                        let p = &ls[l as usize];
-                        lighting::sphere_intersects_aabb(Vec3::from_array(p.position), p.radius, &cluster)
-                    })
-                    .collect();
-                assert_eq!(count as usize, got.len());
-                assert_eq!(got, expected, "n={n}, cluster {i}");
-            }
-        }
+/// ORs the ballot of lanes `0..w` (w ≤ 64) into a 64-bit child mask (two words) at bit `shift`.
+#[inline]
+fn or_ballot(mask: &mut [u32; 2], ballot: [u32; 4], shift: u32) {
+    if shift == 0 {
+        mask[0] |= ballot[0];
+        mask[1] |= ballot[1];
+    } else if shift < 32 {
+        mask[0] |= ballot[0] << shift;
+        mask[1] |= (ballot[0] >> (32 - shift)) | (ballot[1] << shift);
+    } else {
+        mask[1] |= ballot[0] << (shift - 32);
     }
 }
+
+/// Child mask of `count ≤ b` consecutive children: lane `i` of each chunk of `w` tests child
+/// `chunk + i` with `test`; a ballot per chunk. Chunks are unrolled 8 per loop iteration, so a
+/// node costs one iteration of llvmpipe's loop limiter at `b / w ≤ 8`.
+#[inline]
+fn child_mask<C: Coop>(c: &C, b: u32, count: u32, test: impl Fn(u32) -> bool) -> [u32; 2] {
+    let w = c.subgroup_size();
+    let lane = c.lane();
+    let mut mask = [0u32; 2];
+    let mut ch = 0;
+    while ch < b {
+        unroll8!(u => {
+            let first = ch + u * w;
+            if first < b {
+                let i = first + lane;
+                let hit = i < b && i < count && test(i);
+                or_ballot(&mut mask, c.ballot(hit), first);
+            }
+        });
+        ch += 8 * w;
+    }
+    mask
+}
+
+/// Pops the lowest set bit of a two-word mask (the mask must not be empty).
+#[inline]
+fn pop_lowest(mask: &mut [u32; 2]) -> u32 {
+    if mask[0] != 0 {
+        let bit = mask[0].trailing_zeros();
+        mask[0] &= mask[0] - 1;
+        bit
+    } else {
+        let bit = mask[1].trailing_zeros();
+        mask[1] &= mask[1] - 1;
+        32 + bit
+    }
+}
+
+/// The subgroup-parallel walk: every lane of the subgroup calls it with the same `cluster` (in
+/// subgroup-uniform control flow). Lanes whose light meets the cluster call `emit(k, light)` with
+/// its dense slot `k`; every lane returns the cluster's count.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn walk_subgroup<C: Coop>(
+    c: &C,
+    nodes: &[ClusterAabb],
+    lights: &[PointLight],
+    order: &[u32],
+    n: u32,
+    b: u32,
+    cluster: &ClusterAabb,
+    mut emit: impl FnMut(u32, u32),
+) -> u32 {
+    if n == 0 {
+        return 0;
+    }
+    let t = Levels::new(n, b);
+    let w = c.subgroup_size();
+    let lane = c.lane();
+    let top = t.levels - 1;
+    // pending[l]: children of the current level-(l+1) node (or the top level) still to visit;
+    // first[l]: index of child bit 0 at level l.
+    let mut pending = [[0u32; 2]; BVH_MAX_LEVELS as usize];
+    let mut first = [0u32; BVH_MAX_LEVELS as usize];
+    let top_offset = t.offset[top as usize];
+    pending[top as usize] = child_mask(c, b, t.count[top as usize], |i| boxes_overlap(&nodes[(top_offset + i) as usize], cluster));
+    let mut level = top;
+    let mut found = 0;
+    loop {
+        let l = level as usize;
+        if pending[l][0] == 0 && pending[l][1] == 0 {
+            if level == top {
+                break;
+            }
+            level += 1;
+            continue;
+        }
+        let node = first[l] + pop_lowest(&mut pending[l]);
+        let child0 = node * b;
+        if level == 0 {
+            let last = if child0 + b < n { child0 + b } else { n };
+            let mut ch = 0;
+            while ch < b {
+                unroll8!(u => {
+                    let chunk = ch + u * w;
+                    if chunk < b {
+                        let s = child0 + chunk + lane;
+                        let hit = s < last && light_hits(lights, order, s, cluster);
+                        let vote = c.ballot(hit);
+                        if hit {
+                            emit(found + ballot_rank(vote, lane), order[s as usize]);
+                        }
+                        found += ballot_count(vote);
+                    }
+                });
+                ch += 8 * w;
+            }
+        } else {
+            let below = (level - 1) as usize;
+            let children = t.count[below] - child0;
+            let offset = t.offset[below] + child0;
+            pending[below] = child_mask(c, b, children, |i| boxes_overlap(&nodes[(offset + i) as usize], cluster));
+            first[below] = child0;
+            level -= 1;
+        }
+    }
+    found
+}
+
+#[cfg(test)]
+#[path = "light_bvh_tests.rs"]
+mod tests;

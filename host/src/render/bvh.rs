@@ -1,16 +1,18 @@
 //! The light BVH of `clustered-bvh` (`shaders::light_bvh`): Morton keys of the view-space lights
 //! → GPU radix sort (key = 30-bit Morton code, value = light index) → node boxes built level by
-//! level, bottom-up. Memory: 4 B keys + 4 B order per light, sort scratch, ≈ 1 B per light of
-//! nodes (32 B per 32 lights, plus the levels above).
+//! level, bottom-up, with `branching` (32 or 64) children per node. Memory: 4 B keys + 4 B order
+//! per light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
 use super::sort::RadixSort;
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use shaders::layout::{BvhParams, MortonParams, PointLight};
-use shaders::light_bvh::{level_count, level_nodes, level_offset};
+use shaders::light_bvh::{level_count, level_nodes, level_offset, total_nodes, valid_branching};
 use shaders::morton::{MortonQuantizer, MORTON30_BITS, MORTON63_BITS};
 
 pub struct LightBvh {
     pub n: u32,
+    /// Children per node (32 or 64).
+    pub branching: u32,
     keys: Buffer,
     pub order: Buffer,
     pub nodes: Buffer,
@@ -19,8 +21,16 @@ pub struct LightBvh {
 }
 
 impl LightBvh {
-    /// Buffers for `lights` (view space: the quantiser spans their positions).
-    pub fn new(gpu: &Gpu, lights: &[PointLight]) -> VkResult<Self> {
+    /// The default branching for a device: its subgroup width clamped to 32..=64, so one subgroup
+    /// tests a node's children in one step where it can.
+    pub fn default_branching(subgroup_size: u32) -> u32 {
+        if subgroup_size >= 64 { 64 } else { 32 }
+    }
+
+    /// Buffers for `lights` (view space: the quantiser spans their positions) and a tree of
+    /// `branching` (32 or 64) children per node.
+    pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32) -> VkResult<Self> {
+        assert!(valid_branching(branching), "BVH branching {branching}: 32 or 64 (checked by the caller)");
         let n = lights.len() as u32;
         let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
         for l in lights {
@@ -32,10 +42,11 @@ impl LightBvh {
         if lights.is_empty() {
             (lo, hi) = ([0.0; 3], [1.0; 3]);
         }
-        let nodes: u32 = (0..level_count(n.max(1))).map(|l| level_nodes(n.max(1), l)).sum();
+        let nodes = total_nodes(n.max(1), branching);
         let ctx = &gpu.ctx;
         Ok(Self {
             n,
+            branching,
             keys: Buffer::storage(ctx, "light Morton keys", 4 * n as u64)?,
             order: Buffer::storage(ctx, "light order", 4 * n as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
@@ -65,13 +76,14 @@ impl LightBvh {
             self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS)
         })?;
         rec.pass("bvh build", |rec| {
-            let leaves = level_nodes(n, 0);
-            let p = BvhParams { count: n, level: 0, nodes: leaves, _pad: 0 };
+            let b = self.branching;
+            let leaves = level_nodes(n, 0, b);
+            let p = BvhParams { count: n, level: 0, nodes: leaves, branching: b };
             rec.dispatch_linear(&k.bvh_leaves, &[lights, &self.order, &self.nodes], &p, leaves)?;
-            for level in 1..level_count(n) {
-                let nodes = level_nodes(n, level);
-                let p = BvhParams { count: n, level, nodes, _pad: 0 };
-                debug_assert!(level_offset(n, level) > 0);
+            for level in 1..level_count(n, b) {
+                let nodes = level_nodes(n, level, b);
+                let p = BvhParams { count: n, level, nodes, branching: b };
+                debug_assert!(level_offset(n, level, b) > 0);
                 rec.dispatch_linear(&k.bvh_level, &[&self.nodes], &p, nodes)?;
             }
             Ok(())

@@ -75,6 +75,9 @@ pub struct Settings {
     pub frames: u32,
     /// Keep the cluster data for CPU checks and statistics.
     pub read_back: bool,
+    /// Children per light-BVH node (32 or 64); 0: the device default
+    /// ([`bvh::LightBvh::default_branching`]).
+    pub bvh_branching: u32,
 }
 
 /// GPU results kept for checks and statistics.
@@ -189,7 +192,14 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
             let bvh = match s.technique {
-                Technique::ClusteredBvh => Some(bvh::LightBvh::new(gpu, &lights_view).context("allocating the light BVH")?),
+                Technique::ClusteredBvh => {
+                    let b = match s.bvh_branching {
+                        0 => bvh::LightBvh::default_branching(ctx.info.subgroup_size),
+                        b if shaders::light_bvh::valid_branching(b) => b,
+                        b => bail!("BVH branching {b}: 32 or 64"),
+                    };
+                    Some(bvh::LightBvh::new(gpu, &lights_view, b).context("allocating the light BVH")?)
+                }
                 _ => None,
             };
             if let Some(b) = &bvh {

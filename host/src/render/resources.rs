@@ -142,22 +142,23 @@ impl ClusterBuffers {
         let c = with(self.max_clusters);
         rec.pass("assignment", |rec| {
             let m = self.max_clusters;
-            match bvh {
+            let walk = bvh.map(|b| (b, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
+            match walk {
                 None => rec.dispatch_linear(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, m)?,
-                Some(b) => rec.dispatch_linear(
+                Some((b, w)) => rec.dispatch_subgroups(
                     &k.cluster_light_counts_bvh,
                     &[&self.unique, &self.counters, bounds, lights, &self.counts, &b.order, &b.nodes],
-                    &c,
+                    &w,
                     m,
                 )?,
             }
             self.cluster_scan.record(gpu, rec, &self.counts, &self.offsets, m, Some((&self.counters, COUNTER_LIGHT_REFS)))?;
-            match bvh {
+            match walk {
                 None => rec.dispatch_linear(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, m),
-                Some(b) => rec.dispatch_linear(
+                Some((b, w)) => rec.dispatch_subgroups(
                     &k.cluster_light_fill_bvh,
                     &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list, &b.order, &b.nodes],
-                    &c,
+                    &w,
                     m,
                 ),
             }

@@ -179,6 +179,15 @@ impl Recorder<'_> {
         self.dispatch(pipe, buffers, params, crate::render::scan::fold(groups))
     }
 
+    /// Dispatches a kernel that gives each of `items` its own subgroup (item = workgroup index ·
+    /// subgroups per workgroup + subgroup id): enough workgroups for the device's *largest*
+    /// subgroup width (fewest subgroups per workgroup), so every item is covered whatever width
+    /// the driver picks; surplus subgroups find no item and return.
+    pub fn dispatch_subgroups<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, items: u32) -> VkResult<()> {
+        let per_group = (pipe.kernel.invocations() / self.ctx.info.max_subgroup_size.max(1)).max(1);
+        self.dispatch(pipe, buffers, params, crate::render::scan::fold(items.div_ceil(per_group)))
+    }
+
     /// Fills the first `bytes` of a buffer with a repeated `u32` and makes it visible to kernels.
     pub fn fill(&mut self, buffer: &Buffer, value: u32) {
         unsafe { self.ctx.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, buffer.size, value) };
