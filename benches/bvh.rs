@@ -52,6 +52,7 @@ fn bvh(c: &mut Criterion) {
                 frames: 1,
                 read_back: false,
                 bvh_branching: 0,
+                async_compute: true,
             };
             g.bench_function(BenchmarkId::new(format!("{t:?}"), n), |b| {
                 b.iter_custom(|iters| {

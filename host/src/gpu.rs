@@ -93,6 +93,43 @@ impl Gpu {
         }
     }
 
+    /// Records `on_async` for the async-compute queue and `on_main` for the graphics queue, which
+    /// waits for it before its first compute shader (its raster passes overlap the async work);
+    /// waits for both. Passes of `on_async` are timed by `async_profiler`. Without an async-compute
+    /// queue (or with `overlap` false) both go into one command buffer, `on_async` first, timed by
+    /// `profiler`.
+    pub fn run_overlapped<A, B>(
+        &self,
+        overlap: bool,
+        profiler: Option<&mut Profiler>,
+        async_profiler: Option<&mut Profiler>,
+        on_async: impl FnOnce(&mut Recorder<'_>) -> VkResult<A>,
+        on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
+    ) -> VkResult<(A, B)> {
+        if !overlap || self.ctx.async_compute_queue.is_none() {
+            return self.run(profiler, |rec| {
+                let a = on_async(rec)?;
+                Ok((a, on_main(rec)?))
+            });
+        }
+        let stage = ash::vk::PipelineStageFlags::COMPUTE_SHADER;
+        self.ctx
+            .submit_overlapped_and_wait(
+                |cmd| on_async(&mut self.recorder(async_profiler, cmd)),
+                |cmd| on_main(&mut self.recorder(profiler, cmd)),
+                stage,
+            )
+            .expect("an async-compute queue (checked above)")
+    }
+
+    /// A recorder over `cmd`; resets the profiler's queries first.
+    fn recorder<'a>(&'a self, mut profiler: Option<&'a mut Profiler>, cmd: ash::vk::CommandBuffer) -> Recorder<'a> {
+        if let Some(p) = profiler.as_deref_mut() {
+            p.reset(cmd);
+        }
+        Recorder { ctx: &self.ctx, cmd, profiler }
+    }
+
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.
     pub fn run<R>(&self, profiler: Option<&mut Profiler>, f: impl FnOnce(&mut Recorder<'_>) -> VkResult<R>) -> VkResult<R> {
         self.ctx.submit_and_wait(|cmd| {

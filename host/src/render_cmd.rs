@@ -63,6 +63,10 @@ pub struct RenderArgs {
     /// clamped to 32..=64).
     #[arg(long, value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["32", "64"]), |s: String| s.parse::<u32>().unwrap_or(0)))]
     pub bvh_branching: Option<u32>,
+    /// Keep the light sort + BVH build on the graphics queue instead of overlapping them with the
+    /// G-buffer raster on the async-compute queue (devices without one always do).
+    #[arg(long)]
+    pub no_async_compute: bool,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -216,6 +220,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         frames: a.frames,
         read_back: a.stats.is_some(),
         bvh_branching: a.bvh_branching.unwrap_or(0),
+        async_compute: !a.no_async_compute,
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

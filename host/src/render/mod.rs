@@ -78,6 +78,8 @@ pub struct Settings {
     /// Children per light-BVH node (32 or 64); 0: the device default
     /// ([`bvh::LightBvh::default_branching`]).
     pub bvh_branching: u32,
+    /// Run the light sort + BVH build on the async-compute queue when the device has one.
+    pub async_compute: bool,
 }
 
 /// GPU results kept for checks and statistics.
@@ -107,7 +109,13 @@ pub struct Frame {
     pub buffers: Vec<(String, u64)>,
     pub readback: Option<Readback>,
     pub grid: ClusterGrid,
+    /// The light sort and BVH build ran on the async-compute queue, overlapping the G-buffer
+    /// raster ([`ASYNC_PASSES`]); the main queue's passes then account for the frame's time.
+    pub overlapped: bool,
 }
+
+/// Passes that run on the async-compute queue when the frame is overlapped.
+pub const ASYNC_PASSES: [&str; 2] = ["light sort", "bvh build"];
 
 /// Which shading variant a frame runs: 1 (with the specular term) only if the scene has specular
 /// materials.
@@ -176,6 +184,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let (mut unique_clusters, mut light_refs, mut pages) = (0, 0, 0);
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
     let mut cluster = None;
+    let mut overlapped = false;
     match s.technique {
         Technique::Deferred => {
             for f in 0..=s.frames {
@@ -205,19 +214,26 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             if let Some(b) = &bvh {
                 buffers.push(("light bvh".into(), b.bytes()));
             }
+            overlapped = bvh.is_some() && s.async_compute && ctx.async_compute_queue.is_some();
+            let mut async_profiler = crate::vk::Profiler::new_async(ctx, 4)?;
             let mut caps = Capacities::initial(&grid, scene.lights.len() as u32);
             let mut cb = ClusterBuffers::new(gpu, &grid, caps)?;
             let mut f = 0;
             while f <= s.frames {
                 let mut p = params;
                 p.light_capacity = caps.light_refs;
-                gpu.run(Some(&mut profiler), |rec| {
-                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                    if let Some(b) = &bvh {
-                        b.record(gpu, rec, &lights)?;
-                    }
-                    cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf, bvh.as_ref())
-                })?;
+                // The light sort + BVH build depend on the lights only: on the async-compute queue
+                // they overlap the G-buffer raster (the assignment waits for them).
+                gpu.run_overlapped(
+                    overlapped,
+                    Some(&mut profiler),
+                    Some(&mut async_profiler),
+                    |rec| bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, &lights)),
+                    |rec| {
+                        rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
+                        cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf, bvh.as_ref())
+                    },
+                )?;
                 let c: Vec<u32> = cb.counters.read(COUNTERS as usize)?;
                 (unique_clusters, light_refs, pages) =
                     (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
@@ -233,7 +249,9 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                     continue; // re-run this frame
                 }
                 if f > 0 || s.frames == 0 {
-                    timings_all.push(profiler.results()?);
+                    let mut t = async_profiler.results()?;
+                    t.extend(profiler.results()?);
+                    timings_all.push(t);
                 }
                 f += 1;
             }
@@ -252,7 +270,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     } else {
         None
     };
-    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, buffers, readback, grid })
+    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, buffers, readback, grid, overlapped })
 }
 
 /// Per-pass median over frames (passes matched by position).

@@ -28,6 +28,8 @@ pub struct Shared {
     pub push_descriptor: khr::push_descriptor::Device,
     debug_utils: Option<ext::debug_utils::Device>,
     command_pool: Mutex<vk::CommandPool>,
+    /// Command pool of the async-compute family (with `async_compute_queue`).
+    async_command_pool: Option<Mutex<vk::CommandPool>>,
     /// Dropped last (after `Drop::drop` destroyed the device).
     pub instance: Instance,
 }
@@ -64,6 +66,13 @@ impl Context {
             .queue_family_index(info.graphics_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT | vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.call("vkCreateCommandPool")?;
+        let async_command_pool = match info.async_compute_family {
+            Some(f) => {
+                let info = vk::CommandPoolCreateInfo::default().queue_family_index(f).flags(pool_info.flags);
+                Some(Mutex::new(unsafe { device.create_command_pool(&info, None) }.call("vkCreateCommandPool (async compute)")?))
+            }
+            None => None,
+        };
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &device);
         let debug_utils = instance.debug_utils.then(|| ext::debug_utils::Device::new(&instance.raw, &device));
         Ok(Self(Arc::new(Shared {
@@ -76,6 +85,7 @@ impl Context {
             push_descriptor,
             debug_utils,
             command_pool: Mutex::new(command_pool),
+            async_command_pool,
             instance,
         })))
     }
@@ -102,30 +112,131 @@ impl Context {
 
     /// Records commands with `record`, submits them to the graphics+compute queue and waits.
     pub fn submit_and_wait<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> VkResult<R>) -> VkResult<R> {
-        let d = &self.device;
         let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(*pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        let cmd = unsafe { d.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers")?[0];
+        let cmd = self.begin_commands(*pool)?;
         let result = (|| {
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            unsafe { d.begin_command_buffer(cmd, &begin) }.call("vkBeginCommandBuffer")?;
             let r = record(cmd)?;
-            unsafe { d.end_command_buffer(cmd) }.call("vkEndCommandBuffer")?;
-            let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.call("vkCreateFence")?;
-            let cmds = [cmd];
-            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
-            let submitted = {
-                let q = self.queue.lock().unwrap_or_else(|e| e.into_inner());
-                unsafe { d.queue_submit(*q, &[submit], fence) }.call("vkQueueSubmit")
-            };
-            let waited = submitted.and_then(|_| unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.call("vkWaitForFences"));
-            unsafe { d.destroy_fence(fence, None) };
-            waited.map(|_| r)
+            unsafe { self.device.end_command_buffer(cmd) }.call("vkEndCommandBuffer")?;
+            self.submit_all_and_wait(&[(&self.queue, cmd, None, None)])?;
+            Ok(r)
         })();
-        unsafe { d.free_command_buffers(*pool, &[cmd]) };
+        unsafe { self.device.free_command_buffers(*pool, &[cmd]) };
+        result
+    }
+
+    /// Overlapped submission: `record_async` goes to the async-compute queue, `record_main` to the
+    /// graphics+compute queue, which waits for the first (a semaphore) at `wait_stage` only — its
+    /// earlier stages (raster) run concurrently. Waits for both. `None` without an async queue.
+    pub fn submit_overlapped_and_wait<A, B>(
+        &self,
+        record_async: impl FnOnce(vk::CommandBuffer) -> VkResult<A>,
+        record_main: impl FnOnce(vk::CommandBuffer) -> VkResult<B>,
+        wait_stage: vk::PipelineStageFlags,
+    ) -> Option<VkResult<(A, B)>> {
+        let (Some(async_queue), Some(async_pool)) = (&self.async_compute_queue, &self.async_command_pool) else {
+            return None;
+        };
+        let d = &self.device;
+        let async_pool = async_pool.lock().unwrap_or_else(|e| e.into_inner());
+        let main_pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
+        let result = (|| {
+            let semaphore = unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.call("vkCreateSemaphore")?;
+            let ca = match self.begin_commands(*async_pool) {
+                Ok(c) => c,
+                Err(e) => {
+                    unsafe { d.destroy_semaphore(semaphore, None) };
+                    return Err(e);
+                }
+            };
+            let cm = match self.begin_commands(*main_pool) {
+                Ok(c) => c,
+                Err(e) => {
+                    unsafe {
+                        d.free_command_buffers(*async_pool, &[ca]);
+                        d.destroy_semaphore(semaphore, None);
+                    }
+                    return Err(e);
+                }
+            };
+            let submitted = (|| {
+                let a = record_async(ca)?;
+                unsafe { d.end_command_buffer(ca) }.call("vkEndCommandBuffer")?;
+                let b = record_main(cm)?;
+                unsafe { d.end_command_buffer(cm) }.call("vkEndCommandBuffer")?;
+                let wait = Some((semaphore, wait_stage));
+                self.submit_all_and_wait(&[(async_queue, ca, None, Some(semaphore)), (&self.queue, cm, wait, None)])?;
+                Ok((a, b))
+            })();
+            unsafe {
+                d.free_command_buffers(*async_pool, &[ca]);
+                d.free_command_buffers(*main_pool, &[cm]);
+                d.destroy_semaphore(semaphore, None);
+            }
+            submitted
+        })();
+        Some(result)
+    }
+
+    /// Allocates and begins a one-time command buffer from `pool`.
+    fn begin_commands(&self, pool: vk::CommandPool) -> VkResult<vk::CommandBuffer> {
+        let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1);
+        let cmd = unsafe { self.device.allocate_command_buffers(&alloc) }.call("vkAllocateCommandBuffers")?[0];
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        if let Err(e) = unsafe { self.device.begin_command_buffer(cmd, &begin) }.call("vkBeginCommandBuffer") {
+            unsafe { self.device.free_command_buffers(pool, &[cmd]) };
+            return Err(e);
+        }
+        Ok(cmd)
+    }
+
+    /// Submits each `(queue, commands, wait, signal)` in order, then waits for all of them. A
+    /// failed submission still waits for the ones before it, so nothing is freed in flight.
+    #[allow(clippy::type_complexity)]
+    fn submit_all_and_wait(
+        &self,
+        submits: &[(&Mutex<vk::Queue>, vk::CommandBuffer, Option<(vk::Semaphore, vk::PipelineStageFlags)>, Option<vk::Semaphore>)],
+    ) -> VkResult<()> {
+        let d = &self.device;
+        let mut fences = Vec::new();
+        let mut result = Ok(());
+        for (queue, cmd, wait, signal) in submits {
+            let fence = match unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.call("vkCreateFence") {
+                Ok(f) => f,
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            };
+            let cmds = [*cmd];
+            let (wait_sems, wait_stages) = match wait {
+                Some((s, st)) => (vec![*s], vec![*st]),
+                None => (vec![], vec![]),
+            };
+            let signal_sems: Vec<vk::Semaphore> = signal.iter().copied().collect();
+            let submit = vk::SubmitInfo::default()
+                .command_buffers(&cmds)
+                .wait_semaphores(&wait_sems)
+                .wait_dst_stage_mask(&wait_stages)
+                .signal_semaphores(&signal_sems);
+            let q = queue.lock().unwrap_or_else(|e| e.into_inner());
+            match unsafe { d.queue_submit(*q, &[submit], fence) }.call("vkQueueSubmit") {
+                Ok(()) => fences.push(fence),
+                Err(e) => {
+                    unsafe { d.destroy_fence(fence, None) };
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        if !fences.is_empty() {
+            let waited = unsafe { d.wait_for_fences(&fences, true, u64::MAX) }.call("vkWaitForFences");
+            if result.is_ok() {
+                result = waited;
+            }
+        }
+        for f in fences {
+            unsafe { d.destroy_fence(f, None) };
+        }
         result
     }
 }
@@ -138,6 +249,9 @@ impl Drop for Shared {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|e| e.into_inner()), None);
+            if let Some(p) = self.async_command_pool.as_mut() {
+                self.device.destroy_command_pool(*p.get_mut().unwrap_or_else(|e| e.into_inner()), None);
+            }
             self.device.destroy_device(None);
         }
     }

@@ -25,6 +25,8 @@ pub struct DeviceInfo {
     pub full_subgroups: bool,
     pub timestamp_period_ns: f32,
     pub timestamp_valid_bits: u32,
+    /// Valid timestamp bits of the async-compute family (0: no timestamps there, or no family).
+    pub async_timestamp_valid_bits: u32,
     pub max_shared_memory_bytes: u32,
     pub max_storage_buffer_range: u32,
     pub max_workgroup_invocations: u32,
@@ -108,6 +110,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         full_subgroups: f13.compute_full_subgroups == vk::TRUE,
         timestamp_period_ns: p.limits.timestamp_period,
         timestamp_valid_bits: gfx.map(|g| families[g].timestamp_valid_bits).unwrap_or(0),
+        async_timestamp_valid_bits: async_compute.map(|f| families[f].timestamp_valid_bits).unwrap_or(0),
         max_shared_memory_bytes: p.limits.max_compute_shared_memory_size,
         max_storage_buffer_range: p.limits.max_storage_buffer_range,
         max_workgroup_invocations: p.limits.max_compute_work_group_invocations,

@@ -36,7 +36,15 @@ impl Buffer {
     pub fn new(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Self> {
         let size = size.max(MIN_BUFFER_BYTES).next_multiple_of(4);
         let d = &ctx.device;
-        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // With an async-compute queue, buffers are shared by both families (CONCURRENT), so work
+        // on either queue can use them without ownership transfers; semaphores order the access.
+        let families = [ctx.info.graphics_family, ctx.info.async_compute_family.unwrap_or(ctx.info.graphics_family)];
+        let info = match ctx.info.async_compute_family {
+            Some(_) => vk::BufferCreateInfo::default().sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(&families),
+            None => vk::BufferCreateInfo::default().sharing_mode(vk::SharingMode::EXCLUSIVE),
+        }
+        .size(size)
+        .usage(usage);
         let raw = unsafe { d.create_buffer(&info, None) }.call("vkCreateBuffer")?;
         let requirements = unsafe { d.get_buffer_memory_requirements(raw) };
         let allocated = ctx.allocator.lock().unwrap_or_else(|e| e.into_inner()).allocate(&AllocationCreateDesc {

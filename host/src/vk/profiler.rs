@@ -18,19 +18,31 @@ pub struct Profiler {
     ctx: Context,
     pool: vk::QueryPool,
     capacity: u32,
+    /// Valid timestamp bits of the queue family this profiler's command buffers run on.
+    bits: u32,
     names: Vec<String>,
 }
 
 impl Profiler {
-    /// Room for `passes` timed passes per submission.
+    /// Room for `passes` timed passes per submission on the graphics+compute queue.
     pub fn new(ctx: &Context, passes: u32) -> VkResult<Self> {
+        Self::with_bits(ctx, passes, ctx.info.timestamp_valid_bits)
+    }
+
+    /// A profiler for command buffers of the async-compute queue (disabled where that family has
+    /// no timestamps, or where there is no such queue).
+    pub fn new_async(ctx: &Context, passes: u32) -> VkResult<Self> {
+        Self::with_bits(ctx, passes, ctx.info.async_timestamp_valid_bits)
+    }
+
+    fn with_bits(ctx: &Context, passes: u32, bits: u32) -> VkResult<Self> {
         let mut pool = vk::QueryPool::null();
-        if ctx.info.timestamp_valid_bits > 0 {
+        if bits > 0 {
             let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2 * passes);
             pool = unsafe { ctx.device.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
             ctx.set_name(pool, "profiler timestamps");
         }
-        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, names: Vec::new() })
+        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, bits, names: Vec::new() })
     }
 
     pub fn enabled(&self) -> bool {
@@ -74,7 +86,7 @@ impl Profiler {
                 .get_query_pool_results(self.pool, 0, &mut raw, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
         }
         .call("vkGetQueryPoolResults")?;
-        let bits = self.ctx.info.timestamp_valid_bits;
+        let bits = self.bits;
         let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
         let period = self.ctx.info.timestamp_period_ns as f64;
         Ok(self
