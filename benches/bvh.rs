@@ -1,18 +1,28 @@
-//! Light assignment: BVH (Morton keys + radix sort + build + traversal) against the naive
-//! all-lights search, timed with the renderer's own GPU timestamps (`iter_custom` sums the
-//! passes of interest over rendered frames) on `city` at 1280×720.
+//! Light assignment: BVH (Morton keys + sort + build + subgroup traversal) against the naive
+//! all-lights search, for uniform and clustered (hotspot) light distributions, on `city` at
+//! 1280×720.
 //!
-//! `cargo bench -p host --bench bvh` (device: `MANYLIGHTS_DEVICE`; light counts:
+//! * **GPU** — timed with the renderer's own GPU timestamps (`iter_custom` sums the passes of
+//!   interest over rendered frames; the light sort and build run on the graphics queue here,
+//!   `async_compute: false`, so their time is not hidden behind the raster).
+//! * **CPU** — the same kernels' functions run one after the other on one core over the frame's
+//!   unique clusters (read back from the GPU frame): Morton keys + `sort_unstable` + node boxes +
+//!   one walk per cluster, against the naive search per cluster (`clustered::for_each_cluster_light`).
+//!   CPU sizes: `MANYLIGHTS_BVH_CPU_LIGHTS` (default 1k,10k,100k: the naive CPU search at 1M
+//!   lights takes minutes per iteration).
+//!
+//! `cargo bench -p host --bench bvh` (device: `MANYLIGHTS_DEVICE`; GPU light counts:
 //! `MANYLIGHTS_BVH_LIGHTS`, default 1k,10k,100k,1M — sizes over lavapipe's per-invocation light
 //! limit are skipped there). Quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use host::gpu::Gpu;
-use host::render::{self, Settings, Technique};
+use host::render::{self, Readback, Settings, Technique};
 use host::render_cmd::{flatten, scene_input};
 use host::scene::{lights, Scene};
 use host::vk::ContextOptions;
-use shaders::layout::{PRECISION_OCT16, VIEW_SHADED};
-use std::time::Duration;
+use shaders::layout::{FrameParams, PointLight, PRECISION_OCT16, VIEW_SHADED};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
 
 /// Passes that make up a technique's light assignment.
 fn assignment_passes(t: Technique) -> &'static [&'static str] {
@@ -22,47 +32,112 @@ fn assignment_passes(t: Technique) -> &'static [&'static str] {
     }
 }
 
+fn sizes(var: &str, default: &[usize]) -> Vec<usize> {
+    std::env::var(var).ok().map(|s| s.split(',').filter_map(|v| v.trim().parse().ok()).collect()).unwrap_or_else(|| default.to_vec())
+}
+
+fn settings(technique: Technique, read_back: bool) -> Settings {
+    Settings {
+        width: 1280,
+        height: 720,
+        tile_size: 32,
+        technique,
+        view: VIEW_SHADED,
+        normal_precision: PRECISION_OCT16,
+        exposure: 1.0,
+        frames: 1,
+        read_back,
+        bvh_branching: 0,
+        async_compute: false,
+    }
+}
+
+/// The two light distributions: uniform in the scene's bounds, and 8 hotspots.
+fn distributions(scene: &Scene, n: usize) -> [(&'static str, Vec<PointLight>); 2] {
+    [
+        ("uniform", lights::uniform(scene, n, 3).expect("uniform lights")),
+        ("clustered", lights::hotspots(scene.bounds, n, 3, 8).expect("hotspot lights")),
+    ]
+}
+
+/// Frame parameters the CPU cluster searches need (the grid and the light count).
+fn cpu_params(rb: &Readback) -> FrameParams {
+    FrameParams {
+        grid: rb.grid,
+        count: 0,
+        num_lights: rb.lights_view.len() as u32,
+        light_capacity: 0,
+        effects: 0,
+        normal_precision: 0,
+        view: 0,
+        exposure: 1.0,
+        heat_max: 0,
+    }
+}
+
 fn bvh(c: &mut Criterion) {
     let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device");
     eprintln!("device: {}", gpu.ctx.info.line());
     let llvmpipe = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
-    let counts: Vec<usize> = std::env::var("MANYLIGHTS_BVH_LIGHTS")
-        .ok()
-        .map(|s| s.split(',').filter_map(|v| v.trim().parse().ok()).collect())
-        .unwrap_or_else(|| vec![1_000, 10_000, 100_000, 1_000_000]);
     let scene = Scene::load("city", std::path::Path::new(".")).expect("city");
     let flat = flatten(&scene, PRECISION_OCT16).expect("flatten");
     let mut g = c.benchmark_group("light assignment (city 1280x720)");
     g.sample_size(10);
-    for n in counts {
+    for n in sizes("MANYLIGHTS_BVH_LIGHTS", &[1_000, 10_000, 100_000, 1_000_000]) {
         if llvmpipe && n > shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE as usize {
             eprintln!("{n} lights: over lavapipe's loop limit, skipped");
             continue;
         }
-        let l = lights::uniform(&scene, n, 3).expect("lights");
-        for t in [Technique::ClusteredBvh, Technique::ClusteredNaive] {
-            let s = Settings {
-                width: 1280,
-                height: 720,
-                tile_size: 32,
-                technique: t,
-                view: VIEW_SHADED,
-                normal_precision: PRECISION_OCT16,
-                exposure: 1.0,
-                frames: 1,
-                read_back: false,
-                bvh_branching: 0,
-                async_compute: true,
-            };
-            g.bench_function(BenchmarkId::new(format!("{t:?}"), n), |b| {
+        for (dist, l) in distributions(&scene, n) {
+            for t in [Technique::ClusteredBvh, Technique::ClusteredNaive] {
+                let s = settings(t, false);
+                g.bench_function(BenchmarkId::new(format!("gpu {t:?} {dist}"), n), |b| {
+                    b.iter_custom(|iters| {
+                        let mut total = Duration::ZERO;
+                        for _ in 0..iters {
+                            let f = render::render(&gpu, &scene_input(&scene, &flat, &l), &s).expect("frame");
+                            let ms: f64 = f.timings.iter().filter(|p| assignment_passes(t).contains(&p.name.as_str())).map(|p| p.ms).sum();
+                            total += Duration::from_secs_f64(ms * 1e-3);
+                        }
+                        total
+                    })
+                });
+            }
+        }
+    }
+    for n in sizes("MANYLIGHTS_BVH_CPU_LIGHTS", &[1_000, 10_000, 100_000]) {
+        for (dist, l) in distributions(&scene, n) {
+            // The frame's unique clusters and view-space lights, from one GPU frame.
+            let f = render::render(&gpu, &scene_input(&scene, &flat, &l), &settings(Technique::ClusteredNaive, true)).expect("frame");
+            let rb = f.readback.expect("read back");
+            let p = cpu_params(&rb);
+            let branching = 32;
+            g.bench_function(BenchmarkId::new(format!("cpu bvh {dist}"), n), |b| {
                 b.iter_custom(|iters| {
-                    let mut total = Duration::ZERO;
+                    let start = Instant::now();
                     for _ in 0..iters {
-                        let f = render::render(&gpu, &scene_input(&scene, &flat, &l), &s).expect("frame");
-                        let ms: f64 = f.timings.iter().filter(|p| assignment_passes(t).contains(&p.name.as_str())).map(|p| p.ms).sum();
-                        total += Duration::from_secs_f64(ms * 1e-3);
+                        let (order, nodes) = render::bvh::build_cpu(&rb.lights_view, branching);
+                        let mut refs = 0u64;
+                        for &key in &rb.unique {
+                            let cluster = shaders::clustered::cluster_box(&p, &rb.bounds, key);
+                            refs += shaders::light_bvh::for_each_bvh_light(&nodes, &rb.lights_view, &order, p.num_lights, branching, &cluster, |_, _| {}) as u64;
+                        }
+                        black_box(refs);
                     }
-                    total
+                    start.elapsed()
+                })
+            });
+            g.bench_function(BenchmarkId::new(format!("cpu naive {dist}"), n), |b| {
+                b.iter_custom(|iters| {
+                    let start = Instant::now();
+                    for _ in 0..iters {
+                        let mut refs = 0u64;
+                        for &key in &rb.unique {
+                            refs += shaders::clustered::for_each_cluster_light(&p, &rb.bounds, &rb.lights_view, key, |_, _| {}) as u64;
+                        }
+                        black_box(refs);
+                    }
+                    start.elapsed()
                 })
             });
         }

@@ -31,6 +31,8 @@ pub enum Command {
     Render(crate::render_cmd::RenderArgs),
     /// Render a debug frame of the analytic test scene (normal encoding, cluster keys, slices).
     DebugFrame(DebugFrameArgs),
+    /// Sweep techniques × light counts × scenes; write results.csv, SVG plots and results.md.
+    Bench(crate::bench::BenchArgs),
     /// Run every kernel on the GPU and compare with the CPU reference (exit 1 on a mismatch).
     Check,
     /// List Vulkan devices and whether manylights can use them.
@@ -88,6 +90,11 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => {
             let gpu = open(&cli.device)?;
             crate::render_cmd::run(&gpu, &a)?;
+            finish(&gpu)
+        }
+        Command::Bench(a) => {
+            let gpu = open(&cli.device)?;
+            crate::bench::run(&gpu, &a)?;
             finish(&gpu)
         }
         Command::DebugFrame(a) => {

@@ -1,5 +1,6 @@
 //! manylights host: the Vulkan backend (`vk`), the kernels as the algorithms see them (`gpu`),
 //! GPU-vs-CPU parity checks (`parity`), debug frames and the CLI.
+pub mod bench;
 pub mod cli;
 pub mod debug_frame;
 pub mod gpu;

@@ -90,3 +90,36 @@ impl LightBvh {
         })
     }
 }
+
+/// The same BVH on the CPU, from the kernels' own functions run one after the other: Morton keys
+/// of `lights` (view space) → `sort_unstable_by_key` → leaf and inner node boxes. Returns the
+/// sorted order and the nodes (the CPU baseline of benches/bvh.rs, and a test oracle).
+pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shaders::layout::ClusterAabb>) {
+    use shaders::light_bvh::{inner_node_box, leaf_node_box, EMPTY_BOX};
+    let n = lights.len() as u32;
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for l in lights {
+        for a in 0..3 {
+            lo[a] = lo[a].min(l.position[a]);
+            hi[a] = hi[a].max(l.position[a]);
+        }
+    }
+    let q = MortonQuantizer::new(lo, hi, MORTON30_BITS);
+    let mut keyed: Vec<(u32, u32)> = lights.iter().enumerate().map(|(i, l)| (q.morton30_of(l.position), i as u32)).collect();
+    keyed.sort_unstable_by_key(|e| e.0);
+    let order: Vec<u32> = keyed.into_iter().map(|e| e.1).collect();
+    let mut nodes = vec![EMPTY_BOX; total_nodes(n.max(1), branching) as usize];
+    if n == 0 {
+        return (order, nodes);
+    }
+    for node in 0..level_nodes(n, 0, branching) {
+        nodes[node as usize] = leaf_node_box(lights, &order, n, branching, node);
+    }
+    for level in 1..level_count(n, branching) {
+        for node in 0..level_nodes(n, level, branching) {
+            let b = inner_node_box(&nodes, n, branching, level, node);
+            nodes[(level_offset(n, level, branching) + node) as usize] = b;
+        }
+    }
+    (order, nodes)
+}

@@ -101,6 +101,8 @@ pub struct Frame {
     pub pixels: Vec<u32>,
     /// Median GPU milliseconds per pass over the timed frames (or of the single frame).
     pub timings: Vec<PassTiming>,
+    /// (min, max) GPU milliseconds of each pass of `timings` over the timed frames.
+    pub timing_spread: Vec<(f64, f64)>,
     pub unique_clusters: u32,
     pub light_refs: u32,
     pub pages: u32,
@@ -270,19 +272,20 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     } else {
         None
     };
-    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, buffers, readback, grid, overlapped })
+    let (timings, timing_spread) = median_timings(&timings_all);
+    Ok(Frame { pixels, timings, timing_spread, unique_clusters, light_refs, pages, regrowths, buffers, readback, grid, overlapped })
 }
 
-/// Per-pass median over frames (passes matched by position).
-fn median_timings(all: &[Vec<PassTiming>]) -> Vec<PassTiming> {
-    let Some(first) = all.first() else { return Vec::new() };
+/// Per-pass median over frames, and the (min, max) beside it (passes matched by position).
+fn median_timings(all: &[Vec<PassTiming>]) -> (Vec<PassTiming>, Vec<(f64, f64)>) {
+    let Some(first) = all.first() else { return (Vec::new(), Vec::new()) };
     first
         .iter()
         .enumerate()
         .map(|(i, p)| {
             let mut v: Vec<f64> = all.iter().filter_map(|f| f.get(i).map(|t| t.ms)).collect();
             v.sort_by(|a, b| a.total_cmp(b));
-            PassTiming { name: p.name.clone(), ms: v[v.len() / 2] }
+            (PassTiming { name: p.name.clone(), ms: v[v.len() / 2] }, (v[0], v[v.len() - 1]))
         })
-        .collect()
+        .unzip()
 }

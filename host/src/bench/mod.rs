@@ -1,0 +1,293 @@
+//! `manylights bench`: every technique side by side, measured the same way.
+//!
+//! Steps:
+//! 1. For each scene × resolution × light count × technique (the sweep), generate the lights
+//!    (seeded, uniform in the scene), render one warm-up frame and `--frames` timed frames, and
+//!    keep each pass's GPU-timestamp median, min and max, the bytes of every buffer and the
+//!    lights per pixel ([`run_config`]). A configuration that would take minutes per frame
+//!    (brute force at 1M lights, naive assignment at 10M) is skipped with a note
+//!    ([`skip_reason`]); one the device refuses (memory, lavapipe's loop limit) is recorded with
+//!    the refusal — neither is ever timed out or dropped silently.
+//! 2. Write `results.csv` (one row per configuration and stage, [`CSV_COLUMNS`]).
+//! 3. Draw the plots (`plots.rs`): frame ms vs lights (log–log, one line per technique: Karas'
+//!    Fig. 8) and stacked per-stage ms of the clustered techniques (Karas' Fig. 7).
+//! 4. Write `results.md` (`report.rs`): device line and command line on top, the frame-time
+//!    table, the speed-up table at 10k lights against each baseline (Karas' Table 1), the stage
+//!    breakdown, the skips.
+//!
+//! The "frame" stage is the sum of the main queue's passes (async-compute passes that overlap
+//! the raster are not added: [`crate::render::ASYNC_PASSES`]); "compute" is the frame without
+//! its raster passes ([`RASTER_PASSES`]), because a GPU may give raster work only part of the
+//! chip (the H100 runs it on 2 of its TPCs) — both are reported.
+pub mod plots;
+pub mod report;
+
+use crate::gpu::Gpu;
+use crate::render::{self, Settings, Technique};
+use crate::render_cmd::{flatten, scene_input};
+use crate::scene::{lights, Scene};
+use anyhow::{bail, ensure, Context as _, Result};
+use clap::{Args, ValueEnum};
+use shaders::layout::{PRECISION_OCT16, VIEW_SHADED};
+use std::io::Write as _;
+use std::path::PathBuf;
+
+/// Passes that run on the raster pipeline.
+pub const RASTER_PASSES: [&str; 1] = ["gbuffer"];
+
+/// Columns of `results.csv`.
+pub const CSV_COLUMNS: [&str; 14] = [
+    "scene", "technique", "width", "height", "lights", "frames", "stage", "median_ms", "min_ms", "max_ms", "bytes", "lights_per_pixel_mean",
+    "lights_per_pixel_max", "light_lists",
+];
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Light counts to sweep.
+    #[arg(long, value_delimiter = ',', default_values_t = [1_000usize, 10_000, 50_000, 150_000, 1_000_000])]
+    pub lights: Vec<usize>,
+    /// Techniques: `all` or a comma-separated list (`manylights render --help` names them).
+    #[arg(long, default_value = "all")]
+    pub techniques: String,
+    /// Scenes (`city`, `sponza`, `corridor`, `bunny` or a path), comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = ["city".to_string(), "sponza".to_string()])]
+    pub scenes: Vec<String>,
+    #[arg(long, default_value_t = 1920)]
+    pub width: u32,
+    #[arg(long, default_value_t = 1080)]
+    pub height: u32,
+    /// Timed frames per configuration, after one warm-up frame.
+    #[arg(long, default_value_t = 10)]
+    pub frames: u32,
+    /// Cluster / tile edge in pixels.
+    #[arg(long, default_value_t = 32)]
+    pub tile_size: u32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Directory holding sponza/ and bunny/.
+    #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
+    pub assets: PathBuf,
+    /// Output directory (results.csv, results.md, plots).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// One measured stage of one configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    pub scene: String,
+    pub technique: Technique,
+    pub width: u32,
+    pub height: u32,
+    pub lights: usize,
+    pub frames: u32,
+    pub stage: String,
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+    pub bytes: u64,
+    pub lights_per_pixel_mean: f64,
+    pub lights_per_pixel_max: u32,
+    /// Light lists the technique built: unique clusters, screen tiles, or 1 for brute force
+    /// (one list of every light, shared by all pixels).
+    pub light_lists: u32,
+}
+
+/// A configuration that was not measured, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skip {
+    pub scene: String,
+    pub technique: Technique,
+    pub lights: usize,
+    pub why: String,
+}
+
+/// Everything one sweep measured.
+#[derive(Clone, Debug, Default)]
+pub struct Results {
+    pub device: String,
+    pub command: String,
+    pub rows: Vec<Row>,
+    pub skips: Vec<Skip>,
+}
+
+/// The techniques named by `--techniques`.
+pub fn parse_techniques(s: &str) -> Result<Vec<Technique>> {
+    if s.trim() == "all" {
+        return Ok(Technique::value_variants().to_vec());
+    }
+    s.split(',')
+        .map(|t| Technique::from_str(t.trim(), true).map_err(|_| anyhow::anyhow!("unknown technique {t:?} (try `all`, or see `manylights render --help`)")))
+        .collect()
+}
+
+/// Why a configuration is not worth timing: brute force beyond ~2·10^11 light–pixel pairs per
+/// frame on a GPU (≈ 30 s at 1M lights, 1080p, on an H100), and beyond 2·10^9 on a CPU driver.
+pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool) -> Option<String> {
+    let pairs = lights as u64 * pixels;
+    let limit: u64 = if cpu_driver { 2_000_000_000 } else { 200_000_000_000 };
+    match t {
+        Technique::Deferred if pairs > limit => {
+            Some(format!("brute force would test {pairs:.3e} light–pixel pairs per frame (limit {limit:.0e}): minutes per run"))
+        }
+        _ => None,
+    }
+}
+
+/// Renders one configuration and turns its passes into rows.
+pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
+    let l = lights::uniform(scene, n, a.seed).context("generating lights")?;
+    let flat = flatten(scene, PRECISION_OCT16)?;
+    let s = Settings {
+        width: a.width,
+        height: a.height,
+        tile_size: a.tile_size,
+        technique: t,
+        view: VIEW_SHADED,
+        normal_precision: PRECISION_OCT16,
+        exposure: 1.0,
+        frames: a.frames,
+        read_back: true,
+        bvh_branching: 0,
+        async_compute: true,
+    };
+    let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
+    ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");
+    let mut stats = frame.readback.as_ref().map(render::reference::list_stats).unwrap_or_default();
+    if t == Technique::Deferred {
+        stats.mean_per_pixel = n as f64;
+        stats.max_per_pixel = n as u32;
+    }
+    let bytes: u64 = frame.buffers.iter().map(|b| b.1).sum();
+    let light_lists = match t {
+        Technique::Deferred => 1,
+        _ if frame.unique_clusters > 0 => frame.unique_clusters,
+        _ => a.width.div_ceil(a.tile_size) * a.height.div_ceil(a.tile_size),
+    };
+    let row = |stage: &str, median_ms: f64, min_ms: f64, max_ms: f64| Row {
+        scene: name.to_string(),
+        technique: t,
+        width: a.width,
+        height: a.height,
+        lights: n,
+        frames: a.frames,
+        stage: stage.to_string(),
+        median_ms,
+        min_ms,
+        max_ms,
+        bytes,
+        lights_per_pixel_mean: stats.mean_per_pixel,
+        lights_per_pixel_max: stats.max_per_pixel,
+        light_lists,
+    };
+    let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
+    let on_main = |p: &&Row| !(frame.overlapped && render::ASYNC_PASSES.contains(&p.stage.as_str()));
+    let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
+        rows.iter().filter(on_main).filter(|p| raster || !RASTER_PASSES.contains(&p.stage.as_str())).map(f).sum()
+    };
+    // Sums of medians (the per-frame sums were not kept): min and max sum the passes' extremes.
+    let frame_row = row("frame", sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
+    let compute_row = row("compute", sum(&|r| r.median_ms, false), sum(&|r| r.min_ms, false), sum(&|r| r.max_ms, false));
+    rows.push(frame_row);
+    rows.push(compute_row);
+    Ok(rows)
+}
+
+/// The sweep (step 1); progress on stderr.
+pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
+    let techniques = parse_techniques(&a.techniques)?;
+    ensure!(!a.lights.is_empty() && a.lights.iter().all(|&n| n > 0), "--lights needs positive light counts");
+    ensure!(!a.scenes.is_empty(), "--scenes is empty");
+    ensure!(a.frames > 0, "--frames must be at least 1");
+    let cpu_driver = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let total = (a.scenes.len() * a.lights.len() * techniques.len()) as u64;
+    let bar = indicatif::ProgressBar::new(total).with_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut out = Results { device: gpu.ctx.info.line(), command, ..Default::default() };
+    for name in &a.scenes {
+        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        for &n in &a.lights {
+            for &t in &techniques {
+                bar.set_message(format!("{name} {t:?} {n} lights"));
+                let pixels = a.width as u64 * a.height as u64;
+                if let Some(why) = skip_reason(t, n, pixels, cpu_driver) {
+                    out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why });
+                } else {
+                    match run_config(gpu, &scene, name, t, n, a) {
+                        Ok(rows) => out.rows.extend(rows),
+                        Err(e) => out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why: format!("{e:#}") }),
+                    }
+                }
+                bar.inc(1);
+            }
+        }
+    }
+    bar.finish_and_clear();
+    Ok(out)
+}
+
+/// `results.csv` (step 2).
+pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()> {
+    writeln!(w, "{}", CSV_COLUMNS.join(","))?;
+    for x in &r.rows {
+        writeln!(
+            w,
+            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{:.4},{},{}",
+            csv_field(&x.scene),
+            technique_name(x.technique),
+            x.width,
+            x.height,
+            x.lights,
+            x.frames,
+            csv_field(&x.stage),
+            x.median_ms,
+            x.min_ms,
+            x.max_ms,
+            x.bytes,
+            x.lights_per_pixel_mean,
+            x.lights_per_pixel_max,
+            x.light_lists
+        )?;
+    }
+    Ok(())
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Techniques that have rows, in the enum's order.
+pub fn present_techniques(rows: &[&Row]) -> Vec<Technique> {
+    Technique::value_variants().iter().copied().filter(|t| rows.iter().any(|x| x.technique == *t)).collect()
+}
+
+/// The technique's command-line name (`clustered-bvh`).
+pub fn technique_name(t: Technique) -> String {
+    t.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_else(|| format!("{t:?}"))
+}
+
+/// `manylights bench`: sweep, CSV, plots, markdown.
+pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
+    let command = std::env::args().map(|s| if s.contains(' ') { format!("'{s}'") } else { s }).collect::<Vec<_>>().join(" ");
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let r = sweep(gpu, a, command)?;
+    if r.rows.is_empty() {
+        bail!("no configuration could be measured: {:?}", r.skips.iter().map(|s| &s.why).collect::<Vec<_>>());
+    }
+    let csv = a.out.join("results.csv");
+    let mut f = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("creating {}", csv.display()))?);
+    write_csv(&r, &mut f).and_then(|_| f.flush()).with_context(|| format!("writing {}", csv.display()))?;
+    let plots = plots::draw_all(&r, &a.out).context("drawing the plots")?;
+    let md = a.out.join("results.md");
+    std::fs::write(&md, report::markdown(&r, &plots)).with_context(|| format!("writing {}", md.display()))?;
+    for s in &r.skips {
+        eprintln!("skipped {} {} {} lights: {}", s.scene, technique_name(s.technique), s.lights, s.why);
+    }
+    eprintln!("wrote {}, {} and {} plot(s) in {}", csv.display(), md.display(), plots.len(), a.out.display());
+    Ok(())
+}

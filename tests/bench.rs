@@ -1,0 +1,69 @@
+//! `manylights bench` end to end on the local device (validation on): a tiny sweep writes a CSV
+//! with the documented columns whose numbers are all finite and positive, SVG plots, and a
+//! markdown summary that names the device and the command; a technique that cannot run at a size
+//! is reported as skipped, not dropped.
+use host::bench::CSV_COLUMNS;
+use std::process::Command;
+
+#[test]
+fn tiny_bench_writes_csv_plots_and_markdown() {
+    let dir = std::env::temp_dir().join(format!("manylights-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(["bench", "--lights", "100,1000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "2", "--out"])
+        .arg(&dir)
+        .env("MANYLIGHTS_VALIDATION", "true")
+        .output()
+        .expect("running manylights bench");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench failed:\n{err}");
+    let csv = std::fs::read_to_string(dir.join("results.csv")).expect("results.csv");
+    let mut lines = csv.lines();
+    assert_eq!(lines.next().unwrap(), CSV_COLUMNS.join(","));
+    let numeric = |c: &str| !matches!(c, "scene" | "technique" | "stage");
+    let mut rows = 0;
+    let mut techniques = std::collections::BTreeSet::new();
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), CSV_COLUMNS.len(), "row {line:?}");
+        techniques.insert(cells[1].to_string());
+        for (col, cell) in CSV_COLUMNS.iter().zip(&cells) {
+            if numeric(col) {
+                let v: f64 = cell.parse().unwrap_or_else(|_| panic!("{col} = {cell:?} is not a number (row {line:?})"));
+                assert!(v.is_finite() && v > 0.0, "{col} = {v} is not finite and positive (row {line:?})");
+            }
+        }
+        rows += 1;
+    }
+    // Every technique at both light counts, each with its passes + frame + compute.
+    assert!(techniques.len() >= 3, "techniques in the CSV: {techniques:?}");
+    assert!(rows >= techniques.len() * 2 * 3, "{rows} rows");
+    let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
+    assert!(md.contains("**Device:**") && md.contains("bench --lights 100,1000"), "results.md names the device and the command:\n{md}");
+    assert!(md.contains("Speed-up at 1k lights"), "results.md has the speed-up table:\n{md}");
+    for svg in ["frame-vs-lights-city.svg", "compute-vs-lights-city.svg", "stages-city.svg"] {
+        let s = std::fs::read_to_string(dir.join(svg)).unwrap_or_else(|e| panic!("{svg}: {e}"));
+        assert!(s.starts_with("<svg") && s.contains("<text"), "{svg} is an SVG with labels");
+    }
+}
+
+#[test]
+fn bench_bad_input_is_a_one_line_error() {
+    let dir = std::env::temp_dir().join(format!("manylights-bench-bad-{}", std::process::id()));
+    for (args, needle) in [
+        (vec!["--techniques", "warp-drive"], "unknown technique"),
+        (vec!["--lights", "0"], "positive light counts"),
+        (vec!["--scenes", "no-such-scene.obj"], "no-such-scene"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
+            .arg("bench")
+            .args(&args)
+            .args(["--width", "32", "--height", "18", "--frames", "1", "--out"])
+            .arg(&dir)
+            .output()
+            .expect("running manylights bench");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} should fail");
+        assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+}
