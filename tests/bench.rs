@@ -67,3 +67,33 @@ fn bench_bad_input_is_a_one_line_error() {
         assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// The accuracy study on a tiny frame: the reference setting reproduces the reference, tile
+/// sizes only move time (lists are conservative), a smaller ε is never less accurate, and the
+/// Pareto plot and markdown are written.
+#[test]
+fn tiny_accuracy_study() {
+    let dir = std::env::temp_dir().join(format!("manylights-accuracy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(["bench", "--study", "accuracy", "--lights", "1000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "1", "--out"])
+        .arg(&dir)
+        .env("MANYLIGHTS_VALIDATION", "true")
+        .output()
+        .expect("running manylights bench --study accuracy");
+    assert!(out.status.success(), "study failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    let csv = std::fs::read_to_string(dir.join("accuracy.csv")).expect("accuracy.csv");
+    let rows: Vec<Vec<String>> = csv.lines().skip(1).map(|l| l.split(',').map(|c| c.trim_matches('"').to_string()).collect()).collect();
+    assert_eq!(rows.len(), 10, "{csv}");
+    let psnr = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap_or_else(|| panic!("{setting}")).get(3).unwrap().parse().unwrap() };
+    let max_abs = |setting: &str| -> u32 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[4].parse().unwrap() };
+    assert!(max_abs("oct 2×16") <= 1, "the reference setting reproduces brute force");
+    for tile in ["16 px", "32 px", "64 px"] {
+        assert!(max_abs(tile) <= 1, "tile {tile}: conservative lists give the reference image");
+    }
+    let (e2, e3, e4) = (psnr("inverse square cut at ε = 1e-2"), psnr("inverse square cut at ε = 1e-3"), psnr("inverse square cut at ε = 1e-4"));
+    assert!(e2 <= e3 && e3 <= e4, "a smaller cut threshold is never less accurate: {e2} {e3} {e4}");
+    let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
+    assert!(md.contains("| normal encoding | oct 2×8 |") && md.contains("pareto-city.svg"), "{md}");
+    assert!(std::fs::read_to_string(dir.join("pareto-city.svg")).expect("pareto plot").starts_with("<svg"));
+}

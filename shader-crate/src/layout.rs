@@ -143,6 +143,9 @@ pub const PAGE_SIZE: u32 = 1 << PAGE_SHIFT;
 pub const EFFECT_SPECULAR: u32 = 1;
 pub const EFFECT_TEXTURES: u32 = 2;
 pub const EFFECT_ALPHA_TEST: u32 = 4;
+/// Falloff: plain inverse square `1/(d² + 1)` cut to 0 at the light's radius (the accuracy
+/// study's intensity-threshold cut, `lighting::falloff`) instead of Karis' window.
+pub const EFFECT_INVERSE_SQUARE_CUT: u32 = 8;
 
 /// A point light with a finite range. In GPU buffers `position` is in view space (the host
 /// transforms lights each frame); in scenes it is in world space.

@@ -87,7 +87,7 @@
 #[cfg(target_arch = "spirv")]
 use spirv_std::num_traits::Float;
 
-use crate::layout::{ClusterAabb, PointLight, EFFECT_SPECULAR};
+use crate::layout::{ClusterAabb, PointLight, EFFECT_INVERSE_SQUARE_CUT, EFFECT_SPECULAR};
 use glam::Vec3;
 
 /// Relative slack of [`sphere_intersects_aabb`]: `2^-19` (module docs).
@@ -160,6 +160,39 @@ pub fn attenuation(dist2: f32, radius: f32) -> f32 {
     w * w / (dist2 + 1.0)
 }
 
+/// Plain inverse square `1/(d² + 1)` cut to exactly 0 unless `dist2 < radius²`: with the radius
+/// of [`cut_radius`] it drops every contribution below an intensity threshold ε (and only those).
+#[inline]
+pub fn inverse_square_cut(dist2: f32, radius: f32) -> f32 {
+    if dist2 < radius * radius {
+        1.0 / (dist2 + 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// Radius beyond which `intensity / (d² + 1) < epsilon`: `√(max(intensity/ε − 1, 0))`.
+#[inline]
+pub fn cut_radius(intensity: f32, epsilon: f32) -> f32 {
+    let x = intensity / epsilon - 1.0;
+    if x > 0.0 {
+        x.sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The falloff a frame uses: [`attenuation`] (Karis' window), or [`inverse_square_cut`] with
+/// `effects & EFFECT_INVERSE_SQUARE_CUT`. Both are 0 unless `dist2 < radius²`.
+#[inline]
+pub fn falloff(dist2: f32, radius: f32, effects: u32) -> f32 {
+    if effects & EFFECT_INVERSE_SQUARE_CUT != 0 {
+        inverse_square_cut(dist2, radius)
+    } else {
+        attenuation(dist2, radius)
+    }
+}
+
 /// `v / |v|`, or `fallback` when `|v|² ≤ MIN_LENGTH2` (or not a number).
 #[inline]
 fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
@@ -187,14 +220,14 @@ pub fn shininess(roughness: f32) -> f32 {
 }
 
 /// Radiance towards the eye from surface point `p` (view space) with normal `n`, lit by `light`:
-/// normalised Blinn-Phong (module docs) times the light's colour, intensity and [`attenuation`].
+/// normalised Blinn-Phong (module docs) times the light's colour, intensity and [`falloff`].
 /// The specular lobe only with `effects & EFFECT_SPECULAR`. Exactly 0 when `!light_touches`;
 /// finite for every finite input, including `p = 0`, `n = 0`, `p = c`, `r = 0`, `r = 1e30`.
 #[inline]
 pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     let c = Vec3::from_array(light.position);
     let dist2 = distance2(p, c);
-    let att = attenuation(dist2, light.radius);
+    let att = falloff(dist2, light.radius, effects);
     if !(att > 0.0) {
         return Vec3::ZERO;
     }

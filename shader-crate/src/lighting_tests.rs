@@ -109,6 +109,31 @@ fn attenuation_with_huge_radius_is_inverse_square() {
     }
 }
 
+#[test]
+fn inverse_square_cut_drops_exactly_what_is_below_epsilon() {
+    for intensity in [0.5f32, 1.0, 40.0, 1e4] {
+        for eps in [1e-2f32, 1e-3, 1e-4] {
+            let r = cut_radius(intensity, eps);
+            assert!(r.is_finite() && r >= 0.0);
+            // Inside the radius the plain inverse square is kept, beyond it the contribution is
+            // below ε (up to f32 rounding of the radius itself: 1e-5 relative).
+            for t in [0.0f32, 0.5, 0.99, 0.9999] {
+                let d2 = (t * r) * (t * r);
+                assert_eq!(inverse_square_cut(d2, r), 1.0 / (d2 + 1.0));
+                assert!(intensity * inverse_square_cut(d2, r) >= eps * (1.0 - 1e-5), "I={intensity} ε={eps} t={t}");
+            }
+            for t in [1.0f32, 1.0001, 3.0] {
+                let d2 = (t * r) * (t * r);
+                assert_eq!(inverse_square_cut(d2, r), 0.0);
+                assert!(intensity / (d2 + 1.0) <= eps * (1.0 + 1e-5), "I={intensity} ε={eps} t={t}");
+            }
+            assert_eq!(falloff(4.0, r, EFFECT_INVERSE_SQUARE_CUT), inverse_square_cut(4.0, r));
+            assert_eq!(falloff(4.0, r, 0), attenuation(4.0, r));
+        }
+    }
+    assert_eq!(cut_radius(1e-3, 1e-2), 0.0, "a light dimmer than ε everywhere has radius 0");
+}
+
 // ─── light_touches ⇒ shade, exact zero ─────────────────────────────────────────────────────
 
 #[test]

@@ -19,6 +19,7 @@
 //! the raster are not added: [`crate::render::ASYNC_PASSES`]); "compute" is the frame without
 //! its raster passes ([`RASTER_PASSES`]), because a GPU may give raster work only part of the
 //! chip (the H100 runs it on 2 of its TPCs) — both are reported.
+pub mod accuracy;
 pub mod plots;
 pub mod report;
 
@@ -70,6 +71,15 @@ pub struct BenchArgs {
     /// Output directory (results.csv, results.md, plots).
     #[arg(long)]
     pub out: PathBuf,
+    /// Instead of the sweep, run a study: `accuracy` (image error vs time per knob, at the light
+    /// count closest to 10k; writes accuracy.csv, results.md and a Pareto plot per scene).
+    #[arg(long, value_enum)]
+    pub study: Option<Study>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Study {
+    Accuracy,
 }
 
 /// One measured stage of one configuration.
@@ -275,6 +285,17 @@ pub fn technique_name(t: Technique) -> String {
 pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
     let command = std::env::args().map(|s| if s.contains(' ') { format!("'{s}'") } else { s }).collect::<Vec<_>>().join(" ");
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    if a.study == Some(Study::Accuracy) {
+        let rows = accuracy::study(gpu, a)?;
+        let csv = a.out.join("accuracy.csv");
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&csv).with_context(|| format!("creating {}", csv.display()))?);
+        accuracy::write_csv(&rows, &mut f).and_then(|_| f.flush()).with_context(|| format!("writing {}", csv.display()))?;
+        let plots = accuracy::pareto_plots(&rows, &a.out).context("drawing the Pareto plots")?;
+        let md = a.out.join("results.md");
+        std::fs::write(&md, accuracy::markdown(&rows, &gpu.ctx.info.line(), &command, &plots)).with_context(|| format!("writing {}", md.display()))?;
+        eprintln!("wrote {}, {} and {} plot(s) in {}", csv.display(), md.display(), plots.len(), a.out.display());
+        return Ok(());
+    }
     let r = sweep(gpu, a, command)?;
     if r.rows.is_empty() {
         bail!("no configuration could be measured: {:?}", r.skips.iter().map(|s| &s.why).collect::<Vec<_>>());

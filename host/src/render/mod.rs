@@ -86,6 +86,8 @@ pub struct Settings {
 pub struct Readback {
     /// Reversed-Z depth bits per pixel.
     pub depth: Vec<u32>,
+    /// Encoded G-buffer normal per pixel (`Settings::normal_precision`).
+    pub normals: Vec<u32>,
     pub keys: Vec<u32>,
     pub unique: Vec<u32>,
     pub counts: Vec<u32>,
@@ -265,10 +267,14 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let readback = if s.read_back {
         let mut depth = targets.depth_buf;
         let gbuffer: Vec<u32> = depth.read(n as usize)?;
-        Some(match cluster.as_mut() {
+        let mut normal_buf = targets.normal_buf;
+        let normals: Vec<u32> = normal_buf.read(n as usize)?;
+        let mut rb = match cluster.as_mut() {
             Some(cb) => cb.read_back(gbuffer, unique_clusters, light_refs, lights_view.clone(), grid, bounds.clone())?,
-            None => Readback { depth: gbuffer, keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![], lights_view, grid, bounds },
-        })
+            None => Readback { depth: gbuffer, normals: vec![], keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![], lights_view, grid, bounds },
+        };
+        rb.normals = normals;
+        Some(rb)
     } else {
         None
     };

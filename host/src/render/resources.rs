@@ -178,6 +178,7 @@ impl ClusterBuffers {
         let pixels = (grid.width * grid.height) as usize;
         Ok(Readback {
             depth: gbuffer,
+            normals: Vec::new(),
             keys: self.keys.read(pixels)?,
             unique: self.unique.read(unique as usize)?,
             counts: self.counts.read(unique as usize)?,

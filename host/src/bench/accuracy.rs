@@ -1,0 +1,277 @@
+//! `manylights bench --study accuracy`: what each accuracy knob costs in time.
+//!
+//! For every knob setting the frame is rendered with `clustered-bvh` and compared with a
+//! brute-force (`deferred`) reference rendered with the most accurate setting of that knob:
+//! PSNR over the 8-bit RGB image, the largest channel difference (in 1/255) and the share of
+//! pixels that differ at all, next to the GPU time (frame, compute, assignment, shading) and the
+//! lights per cluster. Knobs:
+//! 1. **normal encoding** — octahedral 2×8 / 2×12 / 2×16 bits; the error is also measured on the
+//!    normals themselves (angle to the reference frame's decoded normal per pixel). The reference
+//!    is the 2×16-bit encoding, whose own error is ≤ 0.0040° (bound proved in `octahedral.rs`):
+//!    the G-buffer has no float32 normal target, so "float32" is not a setting here.
+//! 2. **falloff / cutoff** — Karis' window at the scene's radii, and the plain inverse square cut
+//!    where a light's contribution drops below ε ∈ {1e-2, 1e-3, 1e-4} (`lighting::cut_radius`);
+//!    reference: the uncut inverse square (every light reaches every pixel) by brute force.
+//! 3. **tile size** — 16 / 32 / 64 px (the exponential depth slices follow from it, so this is
+//!    also the slice count); reference: brute force. Lists are conservative, so only time and
+//!    lights per cluster change.
+//! 4. **culling test** — only sphere–AABB is implemented; sphere–frustum-planes and exact
+//!    sphere–frustum are not (the report says so).
+use super::{technique_name, BenchArgs};
+use crate::gpu::Gpu;
+use crate::render::{self, Frame, Settings, Technique};
+use crate::render_cmd::{flatten, scene_input};
+use crate::scene::{lights, Scene};
+use anyhow::{Context as _, Result};
+use plotters::prelude::*;
+use shaders::layout::*;
+use shaders::octahedral::{decode, Precision};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One knob setting, measured.
+#[derive(Clone, Debug)]
+pub struct AccuracyRow {
+    pub scene: String,
+    pub knob: &'static str,
+    pub setting: String,
+    pub psnr_db: f64,
+    pub max_abs_255: u32,
+    pub pixels_differing_pct: f64,
+    /// (max, mean) angle in degrees to the reference normals (normal-encoding knob only).
+    pub normal_error_deg: Option<(f64, f64)>,
+    pub frame_ms: f64,
+    pub compute_ms: f64,
+    pub assignment_ms: f64,
+    pub shading_ms: f64,
+    pub lights_per_cluster: f64,
+}
+
+/// Image error of `b` against `a` (RGBA8 words): (PSNR dB, max channel difference, % pixels
+/// differing). PSNR is ∞ for identical images.
+pub fn image_error(a: &[u32], b: &[u32]) -> (f64, u32, f64) {
+    let (mut se, mut max, mut differing) = (0f64, 0u32, 0usize);
+    for (&x, &y) in a.iter().zip(b) {
+        let mut any = false;
+        for s in 0..3 {
+            let d = ((x >> (8 * s)) & 255).abs_diff((y >> (8 * s)) & 255);
+            se += (d * d) as f64;
+            max = max.max(d);
+            any |= d > 0;
+        }
+        differing += usize::from(any);
+    }
+    let mse = se / (3 * a.len().max(1)) as f64;
+    let psnr = if mse == 0.0 { f64::INFINITY } else { 10.0 * (255.0f64 * 255.0 / mse).log10() };
+    (psnr, max, 100.0 * differing as f64 / a.len().max(1) as f64)
+}
+
+/// (max, mean) angle in degrees between the decoded normals of two frames, over pixels with
+/// geometry (reversed-Z depth > 0) in both.
+pub fn normal_error(reference: &Frame, ref_precision: u32, f: &Frame, precision: u32) -> Option<(f64, f64)> {
+    let (ra, fa) = (reference.readback.as_ref()?, f.readback.as_ref()?);
+    let (mut max, mut sum, mut n) = (0f64, 0f64, 0usize);
+    for i in 0..ra.normals.len().min(fa.normals.len()) {
+        if f32::from_bits(ra.depth[i]) <= 0.0 || f32::from_bits(fa.depth[i]) <= 0.0 {
+            continue;
+        }
+        let a = glam::Vec3::from_array(decode([ra.normals[i], 0, 0], Precision::from_u32(ref_precision))).as_dvec3();
+        let b = glam::Vec3::from_array(decode([fa.normals[i], 0, 0], Precision::from_u32(precision))).as_dvec3();
+        let angle = a.normalize_or_zero().dot(b.normalize_or_zero()).clamp(-1.0, 1.0).acos().to_degrees();
+        max = max.max(angle);
+        sum += angle;
+        n += 1;
+    }
+    (n > 0).then(|| (max, sum / n as f64))
+}
+
+fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: u32) -> Settings {
+    Settings {
+        width: a.width,
+        height: a.height,
+        tile_size,
+        technique,
+        view: VIEW_SHADED,
+        normal_precision: precision,
+        exposure: 1.0,
+        frames: a.frames,
+        read_back: true,
+        bvh_branching: 0,
+        async_compute: true,
+    }
+}
+
+fn pass(f: &Frame, name: &str) -> f64 {
+    f.timings.iter().filter(|t| t.name == name).map(|t| t.ms).sum()
+}
+
+/// Frame and compute ms as in the sweep (main queue; compute = without raster).
+fn frame_ms(f: &Frame) -> (f64, f64) {
+    let main = f.timings.iter().filter(|t| !(f.overlapped && render::ASYNC_PASSES.contains(&t.name.as_str())));
+    let (mut frame, mut compute) = (0.0, 0.0);
+    for t in main {
+        frame += t.ms;
+        if !super::RASTER_PASSES.contains(&t.name.as_str()) {
+            compute += t.ms;
+        }
+    }
+    (frame, compute)
+}
+
+/// Runs the study on each scene of `a.scenes` at the light count closest to 10k in `a.lights`.
+pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
+    let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
+    let mut rows = Vec::new();
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 11) as u64);
+    for name in &a.scenes {
+        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
+        let flat = flatten(&scene, PRECISION_OCT16)?;
+        let run = |ls: &[shaders::layout::PointLight], effects: u32, s: &Settings| -> Result<Frame> {
+            let flat_p = if s.normal_precision == PRECISION_OCT16 { None } else { Some(flatten(&scene, s.normal_precision)?) };
+            let mut input = scene_input(&scene, flat_p.as_ref().unwrap_or(&flat), ls);
+            input.effects |= effects;
+            bar.inc(1);
+            render::render(gpu, &input, s)
+        };
+        let mut measure = |knob: &'static str, setting: String, reference: &Frame, f: &Frame, normals: Option<(f64, f64)>| {
+            let (psnr_db, max_abs_255, pixels_differing_pct) = image_error(&reference.pixels, &f.pixels);
+            let (frame, compute) = frame_ms(f);
+            let lists = f.readback.as_ref().map(render::reference::list_stats).unwrap_or_default();
+            rows.push(AccuracyRow {
+                scene: name.clone(),
+                knob,
+                setting,
+                psnr_db,
+                max_abs_255,
+                pixels_differing_pct,
+                normal_error_deg: normals,
+                frame_ms: frame,
+                compute_ms: compute,
+                assignment_ms: pass(f, "assignment") + pass(f, "light sort") + pass(f, "bvh build"),
+                shading_ms: pass(f, "shading"),
+                lights_per_cluster: lists.mean_per_cluster,
+            });
+        };
+        // 1 + 3: reference = brute force, 2×16-bit normals, window falloff.
+        let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, PRECISION_OCT16))?;
+        for (p, label) in [(PRECISION_OCT8, "oct 2×8"), (PRECISION_OCT12, "oct 2×12"), (PRECISION_OCT16, "oct 2×16")] {
+            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, a.tile_size, p))?;
+            let ne = normal_error(&reference, PRECISION_OCT16, &f, p);
+            measure("normal encoding", label.into(), &reference, &f, ne);
+        }
+        for tile in [16, 32, 64] {
+            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, PRECISION_OCT16))?;
+            measure("tile size", format!("{tile} px ({} slices)", f.grid.num_slices), &reference, &f, None);
+        }
+        // 2: reference = brute force with the uncut inverse square.
+        let uncut: Vec<_> = base.iter().map(|l| PointLight { radius: 1e30, ..*l }).collect();
+        let s = settings(a, Technique::ClusteredBvh, a.tile_size, PRECISION_OCT16);
+        let reference = run(&uncut, EFFECT_INVERSE_SQUARE_CUT, &settings(a, Technique::Deferred, a.tile_size, PRECISION_OCT16))?;
+        let f = run(&base, 0, &s)?;
+        measure("falloff", "Karis window (scene radii)".into(), &reference, &f, None);
+        for eps in [1e-2f32, 1e-3, 1e-4] {
+            let cut: Vec<_> = base
+                .iter()
+                .map(|l| PointLight { radius: shaders::lighting::cut_radius(l.intensity * l.colour.iter().fold(0f32, |m, &c| m.max(c)), eps), ..*l })
+                .collect();
+            let f = run(&cut, EFFECT_INVERSE_SQUARE_CUT, &s)?;
+            measure("falloff", format!("inverse square cut at ε = {eps:e}"), &reference, &f, None);
+        }
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// `accuracy.csv`.
+pub fn write_csv(rows: &[AccuracyRow], w: &mut impl std::io::Write) -> std::io::Result<()> {
+    writeln!(w, "scene,knob,setting,psnr_db,max_abs_255,pixels_differing_pct,normal_max_deg,normal_mean_deg,frame_ms,compute_ms,assignment_ms,shading_ms,lights_per_cluster")?;
+    for r in rows {
+        let (nmax, nmean) = r.normal_error_deg.map(|(a, b)| (format!("{a:.6}"), format!("{b:.6}"))).unwrap_or_default();
+        writeln!(
+            w,
+            "{},{},\"{}\",{:.3},{},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.3}",
+            r.scene, r.knob, r.setting, r.psnr_db, r.max_abs_255, r.pixels_differing_pct, nmax, nmean, r.frame_ms, r.compute_ms, r.assignment_ms, r.shading_ms, r.lights_per_cluster
+        )?;
+    }
+    Ok(())
+}
+
+/// The markdown section (table per scene) and the Pareto plots' names.
+pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[PathBuf]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# manylights accuracy vs time\n\n**Device:** {device}\n\nGenerated by:\n\n```\n{command}\n```\n");
+    let _ = writeln!(
+        md,
+        "Each setting renders with `{}` and is compared with a brute-force reference at the knob's most accurate \
+         setting (normal encoding, tile size: 2×16-bit normals and the window falloff; falloff: the uncut inverse \
+         square). PSNR over 8-bit RGB (∞ = identical), max |Δ| in 1/255, share of pixels with any channel differing. \
+         Not measured: a float32 normal target (the G-buffer stores 32-bit octahedral codes; 2×16 is the reference) \
+         and the sphere–frustum-plane and exact sphere–frustum culling tests (only sphere–AABB is implemented).\n",
+        technique_name(Technique::ClusteredBvh)
+    );
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let _ = writeln!(md, "## {scene}\n");
+        let _ = writeln!(md, "| knob | setting | PSNR dB | max Δ/255 | pixels differing | normal error max / mean ° | frame ms | compute ms | assignment ms | shading ms | lights/cluster |");
+        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
+        for r in rows.iter().filter(|r| r.scene == scene) {
+            let ne = r.normal_error_deg.map(|(a, b)| format!("{a:.4} / {b:.4}")).unwrap_or_else(|| "–".into());
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.2} | {} | {:.3} % | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} |",
+                r.knob, r.setting, r.psnr_db, r.max_abs_255, r.pixels_differing_pct, ne, r.frame_ms, r.compute_ms, r.assignment_ms, r.shading_ms, r.lights_per_cluster
+            );
+        }
+        let _ = writeln!(md);
+    }
+    for p in plots {
+        let _ = writeln!(md, "![{0}]({0})\n", p.display());
+    }
+    md
+}
+
+/// Error (RMSE in 8-bit units, from the PSNR) vs compute ms, one point per setting, the Pareto
+/// front joined.
+pub fn pareto_plots(rows: &[AccuracyRow], dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let pts: Vec<(&AccuracyRow, f64, f64)> = rows
+            .iter()
+            .filter(|r| r.scene == scene)
+            .map(|r| (r, r.compute_ms.max(1e-6), (255.0 * 10f64.powf(-r.psnr_db / 20.0)).max(1e-3)))
+            .collect();
+        let name = PathBuf::from(format!("pareto-{}.svg", scene.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect::<String>()));
+        let path = dir.join(&name);
+        let root = SVGBackend::new(&path, (960, 600)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.1), b.max(p.1)));
+        let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.2), b.max(p.2)));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("{scene}: image error vs compute time"), ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), (y0 * 0.5..y1 * 2.0).log_scale())?;
+        chart.configure_mesh().x_desc("compute ms (median)").y_desc("RMSE (8-bit units; 0 drawn at 1e-3)").draw()?;
+        let mut front: Vec<(f64, f64)> = pts.iter().filter(|p| !pts.iter().any(|q| q.1 <= p.1 && q.2 <= p.2 && (q.1 < p.1 || q.2 < p.2))).map(|p| (p.1, p.2)).collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart.draw_series(LineSeries::new(front, BLACK.stroke_width(1)))?.label("Pareto front").legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        for (i, knob) in ["normal encoding", "tile size", "falloff"].iter().enumerate() {
+            let colour = Palette99::pick(i).mix(1.0);
+            let mine: Vec<_> = pts.iter().filter(|p| p.0.knob == *knob).collect();
+            chart
+                .draw_series(mine.iter().map(|p| Circle::new((p.1, p.2), 5, colour.filled())))?
+                .label(*knob)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, colour.filled()));
+            chart.draw_series(mine.iter().map(|p| Text::new(p.0.setting.clone(), (p.1, p.2), ("sans-serif", 12))))?;
+        }
+        chart.configure_series_labels().position(SeriesLabelPosition::UpperRight).background_style(WHITE.mix(0.85)).border_style(BLACK).draw()?;
+        root.present()?;
+        files.push(name);
+    }
+    Ok(files)
+}
