@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 /// Passes that make up a technique's light assignment.
 fn assignment_passes(t: Technique) -> &'static [&'static str] {
     match t {
-        Technique::ClusteredBvh => &["light sort", "bvh build", "assignment"],
+        Technique::ClusteredBvh => &["morton keys", "light sort", "bvh build", "assignment"],
         _ => &["assignment"],
     }
 }

@@ -148,7 +148,7 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 normal_error_deg: normals,
                 frame_ms: frame,
                 compute_ms: compute,
-                assignment_ms: pass(f, "assignment") + pass(f, "light sort") + pass(f, "bvh build"),
+                assignment_ms: pass(f, "assignment") + pass(f, "morton keys") + pass(f, "light sort") + pass(f, "bvh build"),
                 shading_ms: pass(f, "shading"),
                 lights_per_cluster: lists.mean_per_cluster,
             });

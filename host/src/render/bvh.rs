@@ -64,17 +64,16 @@ impl LightBvh {
         self.keys.size + self.order.size + self.nodes.size
     }
 
-    /// Records key generation + sort ("light sort") and the level-by-level build ("bvh build").
+    /// Records the Morton keys ("morton keys"), their sort ("light sort") and the level-by-level
+    /// build ("bvh build").
     pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, lights: &Buffer) -> VkResult<()> {
         let k = &gpu.kernels;
         let n = self.n;
         if n == 0 {
             return Ok(());
         }
-        rec.pass("light sort", |rec| {
-            rec.dispatch_linear(&k.light_keys, &[lights, &self.keys, &self.order], &self.quantizers, n)?;
-            self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS)
-        })?;
+        rec.pass("morton keys", |rec| rec.dispatch_linear(&k.light_keys, &[lights, &self.keys, &self.order], &self.quantizers, n))?;
+        rec.pass("light sort", |rec| self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS))?;
         rec.pass("bvh build", |rec| {
             let b = self.branching;
             let leaves = level_nodes(n, 0, b);

@@ -119,7 +119,7 @@ pub struct Frame {
 }
 
 /// Passes that run on the async-compute queue when the frame is overlapped.
-pub const ASYNC_PASSES: [&str; 2] = ["light sort", "bvh build"];
+pub const ASYNC_PASSES: [&str; 3] = ["morton keys", "light sort", "bvh build"];
 
 /// Which shading variant a frame runs: 1 (with the specular term) only if the scene has specular
 /// materials.
