@@ -69,6 +69,21 @@ fn seventy_thousand_lights_all_visited() {
     assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
 }
 
+/// The top of the BVH issue's range: 100 000 lights on city and Sponza (when present), small
+/// frames so the CPU references stay quick.
+#[test]
+fn hundred_thousand_lights_city_and_sponza() {
+    let gpu = common::gpu();
+    let scene = city();
+    let l = lights::uniform(&scene, 100_000, 19).unwrap();
+    assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 100k");
+    if assets().join("sponza").exists() {
+        let scene = Scene::load("sponza", &assets()).unwrap();
+        let l = lights::uniform(&scene, 100_000, 23).unwrap();
+        assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "sponza 100k");
+    }
+}
+
 /// Every G-buffer normal precision renders, and clustered still equals deferred with it.
 #[test]
 fn normal_precisions() {
