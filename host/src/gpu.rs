@@ -33,6 +33,8 @@ pub struct Kernels {
     pub bvh_level: ComputePipeline<BvhParams>,
     pub cluster_light_counts_bvh: ComputePipeline<FrameParams>,
     pub cluster_light_fill_bvh: ComputePipeline<FrameParams>,
+    /// Tiled culling + shading `[diffuse only, with specular]`.
+    pub shade_tiled: [ComputePipeline<TiledParams>; 2],
 }
 
 impl Kernels {
@@ -68,6 +70,10 @@ impl Kernels {
             bvh_level: ComputePipeline::new(ctx, &module, kernels::BVH_LEVEL)?,
             cluster_light_counts_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS_BVH)?,
             cluster_light_fill_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL_BVH)?,
+            shade_tiled: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_SPECULAR)?,
+            ],
         })
     }
 }

@@ -70,3 +70,7 @@ pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 3)
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
 pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_counts_bvh", 7);
 pub const CLUSTER_LIGHT_FILL_BVH: Kernel<FrameParams> = linear("clustered_bvh::cluster_light_fill_bvh", 8);
+
+// Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
+pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tiled::TILED_WORKGROUP, 1, 1], true);
+pub const SHADE_TILED_SPECULAR: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_specular", 8, [crate::tiled::TILED_WORKGROUP, 1, 1], true);

@@ -58,6 +58,8 @@ pub mod radix;
 pub mod raster;
 pub mod reconstruct;
 pub mod scan;
+#[cfg(feature = "compute")]
+pub mod tiled;
 
 #[cfg(not(target_arch = "spirv"))]
 pub mod kernels;

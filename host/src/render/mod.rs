@@ -20,6 +20,7 @@ pub mod resources;
 pub mod scan;
 pub mod sort;
 pub mod stats;
+pub mod tiled;
 
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler};
@@ -40,6 +41,12 @@ pub enum Technique {
     /// Clustered deferred with lights Morton-sorted (GPU radix sort) into a 32-ary BVH that each
     /// unique cluster traverses.
     ClusteredBvh,
+    /// Tiled deferred (Olsson & Assarsson 2011; Harada et al. 2012): per screen tile, depth bounds,
+    /// frustum culling into a workgroup-memory list, shading in the same dispatch (`tiled.rs`).
+    Tiled,
+    /// `tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.
+    #[value(name = "tiled-2.5d")]
+    Tiled25d,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -101,6 +108,9 @@ pub struct Frame {
     pub pages: u32,
     /// Times a buffer had to grow and the frame re-run.
     pub regrowths: u32,
+    /// Longest light list of one tile or cluster (tiled and clustered-aabb; 0 otherwise). A tiled
+    /// list longer than `shaders::tiled::LIST_CAPACITY` was culled and shaded in several rounds.
+    pub max_list: u32,
     pub buffers: Vec<(String, u64)>,
     pub readback: Option<Readback>,
     pub grid: ClusterGrid,
@@ -170,7 +180,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     ];
     let mut profiler = Profiler::new(ctx, 16)?;
     let mut regrowths = 0;
-    let (mut unique_clusters, mut light_refs, mut pages) = (0, 0, 0);
+    let (mut unique_clusters, mut light_refs, mut pages, mut max_list) = (0, 0, 0, 0);
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
     let mut cluster = None;
     match s.technique {
@@ -186,6 +196,20 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                     timings_all.push(profiler.results()?);
                 }
             }
+        }
+        Technique::Tiled | Technique::Tiled25d => {
+            let mut t = tiled::Tiled::new(gpu, &params, s.technique == Technique::Tiled25d)?;
+            for f in 0..=s.frames {
+                gpu.run(Some(&mut profiler), |rec| {
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
+                    t.record(gpu, rec, &targets, &lights, &materials, &frame_buf, &bounds_buf)
+                })?;
+                if f > 0 || s.frames == 0 {
+                    timings_all.push(profiler.results()?);
+                }
+            }
+            (light_refs, max_list) = t.list_totals()?;
+            buffers.extend(t.sizes());
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
             let bvh = match s.technique {
@@ -242,7 +266,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     } else {
         None
     };
-    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, buffers, readback, grid })
+    Ok(Frame { pixels, timings: median_timings(&timings_all), unique_clusters, light_refs, pages, regrowths, max_list, buffers, readback, grid })
 }
 
 /// Per-pass median over frames (passes matched by position).
