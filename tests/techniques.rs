@@ -12,7 +12,7 @@ use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
 use std::path::PathBuf;
 
 /// Every technique of this file.
-const TECHNIQUES: [Technique; 2] = [Technique::Tiled, Technique::Tiled25d];
+const TECHNIQUES: [Technique; 3] = [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb];
 
 fn assets() -> PathBuf {
     std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))

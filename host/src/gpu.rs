@@ -35,6 +35,11 @@ pub struct Kernels {
     pub cluster_light_fill_bvh: ComputePipeline<FrameParams>,
     /// Tiled culling + shading `[diffuse only, with specular]`.
     pub shade_tiled: [ComputePipeline<TiledParams>; 2],
+    pub aabb_bounds: ComputePipeline<FrameParams>,
+    pub aabb_mark: ComputePipeline<FrameParams>,
+    pub aabb_compact: ComputePipeline<FrameParams>,
+    pub aabb_assign: ComputePipeline<FrameParams>,
+    pub shade_aabb: [ComputePipeline<FrameParams>; 2],
 }
 
 impl Kernels {
@@ -73,6 +78,14 @@ impl Kernels {
             shade_tiled: [
                 ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_DIFFUSE)?,
                 ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_SPECULAR)?,
+            ],
+            aabb_bounds: ComputePipeline::new(ctx, &module, kernels::AABB_BOUNDS)?,
+            aabb_mark: ComputePipeline::new(ctx, &module, kernels::AABB_MARK)?,
+            aabb_compact: ComputePipeline::new(ctx, &module, kernels::AABB_COMPACT)?,
+            aabb_assign: ComputePipeline::new(ctx, &module, kernels::AABB_ASSIGN)?,
+            shade_aabb: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_SPECULAR)?,
             ],
         })
     }

@@ -42,6 +42,8 @@ pub mod cluster_key;
 #[cfg(feature = "compute")]
 pub mod clustered;
 #[cfg(feature = "compute")]
+pub mod clustered_aabb;
+#[cfg(feature = "compute")]
 pub mod clustered_bvh;
 pub mod coop;
 pub mod debug_view;

@@ -504,4 +504,4 @@ tiled_entry!(shade_tiled_specular, true);
 
 #[cfg(test)]
 #[path = "tiled_tests.rs"]
-mod tests;
+pub(crate) mod tests;

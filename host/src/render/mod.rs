@@ -13,6 +13,7 @@
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
 pub mod bvh;
+pub mod clustered_aabb;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
@@ -47,6 +48,9 @@ pub enum Technique {
     /// `tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.
     #[value(name = "tiled-2.5d")]
     Tiled25d,
+    /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
+    /// depth, staged sphere–box assignment with subgroup-aggregated atomics (`clustered_aabb.rs`).
+    ClusteredAabb,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -210,6 +214,12 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             }
             (light_refs, max_list) = t.list_totals()?;
             buffers.extend(t.sizes());
+        }
+        Technique::ClusteredAabb => {
+            let gbuf = |rec: &mut crate::vk::Recorder<'_>| rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets));
+            let o = clustered_aabb::run(gpu, &params, s.frames, &mut profiler, &gbuf, &targets, &bounds_buf, &lights, &materials, &frame_buf)?;
+            (timings_all, unique_clusters, light_refs, max_list, regrowths) = (o.timings, o.active, o.refs, o.max_list, o.regrowths);
+            buffers.extend(o.buffers);
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
             let bvh = match s.technique {
