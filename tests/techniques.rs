@@ -96,12 +96,38 @@ fn city_corner_camera() -> Camera {
     }
 }
 
+/// The widest ratio of far to near depth within one 16 px tile of a frame's depth buffer.
+fn widest_tile_depth_ratio(depth: &[u32], w: u32, h: u32) -> f32 {
+    let mut widest = 0.0f32;
+    for ty in 0..h / 16 {
+        for tx in 0..w / 16 {
+            let z: Vec<f32> = (0..256).map(|q| f32::from_bits(depth[((ty * 16 + q / 16) * w + tx * 16 + q % 16) as usize])).filter(|&z| z > 0.0).collect();
+            // Reversed-Z: distance ratio far/near = z_max / z_min.
+            if let (Some(lo), Some(hi)) = (z.iter().cloned().reduce(f32::min), z.iter().cloned().reduce(f32::max)) {
+                widest = widest.max(hi / lo);
+            }
+        }
+    }
+    widest
+}
+
+/// Equality on a view whose tiles span near and far geometry (checked: some 16 px tile spans a
+/// 20× depth ratio); the 2.5D mask culls at least as much as the frustum alone there.
+fn assert_discontinuity_view(gpu: &Gpu, scene: &Scene, l: &[PointLight], what: &str) {
+    let (w, h) = (160, 90);
+    let frames = assert_equal_to_reference(gpu, scene, l, w, h, what);
+    let depth = frame(gpu, scene, l, &Settings { read_back: true, ..settings(w, h, Technique::Deferred, 16) }).readback.unwrap().depth;
+    let widest = widest_tile_depth_ratio(&depth, w, h);
+    assert!(widest > 20.0, "{what}: some tile should span a 20x depth ratio, the widest spans {widest}");
+    assert!(frames[1].light_refs <= frames[0].light_refs, "{what}: 2.5D keeps {} refs, tiled {}", frames[1].light_refs, frames[0].light_refs);
+}
+
 #[test]
-fn depth_discontinuity_view_equals_the_reference() {
+fn depth_discontinuity_views_equal_the_reference() {
     let gpu = common::gpu();
     let mut scene = city();
     scene.camera = city_corner_camera();
-    // Lights along the avenue and around the corner, plus the uniform ones.
+    // Lights along the avenue and around the corner, plus uniform ones.
     let mut l = lights::uniform(&scene, 3_000, 21).unwrap();
     l.extend((0..200).map(|i| PointLight {
         position: [3.0 + (i % 10) as f32 * 1.5, 0.5 + (i % 3) as f32, 8.0 - (i / 10) as f32 * 6.0],
@@ -109,24 +135,24 @@ fn depth_discontinuity_view_equals_the_reference() {
         colour: [1.0, 0.8, 0.6],
         intensity: 3.0,
     }));
-    let (w, h) = (160, 90);
-    let frames = assert_equal_to_reference(&gpu, &scene, &l, w, h, "city corner");
-    // The view really has the discontinuity: near and far geometry in one 16 px tile.
-    let depth = frame(&gpu, &scene, &l, &Settings { read_back: true, ..settings(w, h, Technique::Deferred, 16) }).readback.unwrap().depth;
-    let widest = (0..(w / 16) * (h / 16))
-        .map(|t| {
-            let (tx, ty) = (t % (w / 16), t / (w / 16));
-            let d: Vec<f32> = (0..256)
-                .map(|q| f32::from_bits(depth[((ty * 16 + q / 16) * w + tx * 16 + q % 16) as usize]))
-                .filter(|&z| z > 0.0)
-                .map(|z| 0.1 / z)
-                .collect();
-            d.iter().cloned().fold(0.0f32, f32::max) / d.iter().cloned().fold(f32::MAX, f32::min)
-        })
-        .fold(0.0f32, f32::max);
-    assert!(widest > 20.0, "some tile should span a 20x depth ratio, the widest spans {widest}");
-    // The 2.5D mask culls at least as much as the frustum alone.
-    assert!(frames[1].light_refs <= frames[0].light_refs, "2.5D: {} refs, tiled {}", frames[1].light_refs, frames[0].light_refs);
+    assert_discontinuity_view(&gpu, &scene, &l, "city corner");
+    let mut sponza = Scene::load("sponza", &assets()).unwrap();
+    sponza.camera = sponza_column_camera();
+    let l = lights::uniform(&sponza, 10_000, 23).unwrap();
+    assert_discontinuity_view(&gpu, &sponza, &l, "sponza column");
+}
+
+/// Sponza: about 100 units (≈ 0.8 m) east of the ground-floor column near (500, 200), looking
+/// west down the court: the column at the right edge, the far end of the court ~1900 units away.
+fn sponza_column_camera() -> Camera {
+    Camera {
+        position: glam::Vec3::new(590.0, 160.0, 140.0),
+        target: glam::Vec3::new(-1300.0, 260.0, 200.0),
+        up: glam::Vec3::Y,
+        fov_y_degrees: 60.0,
+        near: 5.0,
+        far: 5000.0,
+    }
 }
 
 /// 2000 lights at one point: more than a tile list holds (several rounds) and more references
@@ -164,6 +190,41 @@ fn tile_sizes_and_odd_resolutions() {
             let f = frame(&gpu, &scene, &l, &settings(w, h, t, tile));
             let worst = worst_channel(&reference.pixels, &f.pixels);
             assert!(worst <= 1, "{w}x{h}, {tile} px tiles, {t:?}: differs from deferred by {worst}/255");
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// More lights than one lavapipe loop may iterate (65 535): the batched culling and the 16-wide
+/// light loops must still visit every light (lavapipe's loop limiter drops the rest silently).
+#[test]
+fn seventy_thousand_lights_all_visited() {
+    let gpu = common::gpu();
+    let scene = city();
+    let l = lights::uniform(&scene, 70_000, 13).unwrap();
+    assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
+}
+
+/// The heatmap view: clustered-aabb's lists are those of clustered-naive (same boxes, same test),
+/// so the heatmaps agree pixel for pixel; a tiled heatmap is constant over each tile's geometry.
+#[test]
+fn heatmaps() {
+    let gpu = common::gpu();
+    let scene = city();
+    let l = lights::uniform(&scene, 2_000, 29).unwrap();
+    let (w, h) = (96, 54);
+    let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: shaders::layout::VIEW_HEATMAP, ..settings(w, h, t, tile) }).pixels;
+    assert_eq!(heat(Technique::ClusteredAabb, 32), heat(Technique::ClusteredNaive, 32), "clustered-aabb and clustered-naive heatmaps");
+    let background = shaders::clustered::BACKGROUND_RGBA8;
+    for t in [Technique::Tiled, Technique::Tiled25d] {
+        let px = heat(t, 16);
+        assert!(px.iter().any(|&p| p != background && p & 0x00ff_ffff != 0), "{t:?}: the heatmap shows lights");
+        for ty in 0..h.div_ceil(16) {
+            for tx in 0..w / 16 {
+                let tile: Vec<u32> =
+                    (0..256).map(|q| (ty * 16 + q / 16, tx * 16 + q % 16)).filter(|&(y, _)| y < h).map(|(y, x)| px[(y * w + x) as usize]).filter(|&p| p != background).collect();
+                assert!(tile.windows(2).all(|p| p[0] == p[1]), "{t:?}: tile ({tx}, {ty}) has several counts");
+            }
         }
     }
     common::assert_clean(&gpu);
