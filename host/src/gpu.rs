@@ -33,6 +33,13 @@ pub struct Kernels {
     pub bvh_level: ComputePipeline<BvhParams>,
     pub cluster_light_counts_bvh: ComputePipeline<BvhAssignParams>,
     pub cluster_light_fill_bvh: ComputePipeline<BvhAssignParams>,
+    /// Tiled culling + shading `[diffuse only, with specular]`.
+    pub shade_tiled: [ComputePipeline<TiledParams>; 2],
+    pub aabb_bounds: ComputePipeline<FrameParams>,
+    pub aabb_mark: ComputePipeline<FrameParams>,
+    pub aabb_compact: ComputePipeline<FrameParams>,
+    pub aabb_assign: ComputePipeline<FrameParams>,
+    pub shade_aabb: [ComputePipeline<FrameParams>; 2],
 }
 
 impl Kernels {
@@ -68,6 +75,18 @@ impl Kernels {
             bvh_level: ComputePipeline::new(ctx, &module, kernels::BVH_LEVEL)?,
             cluster_light_counts_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS_BVH)?,
             cluster_light_fill_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL_BVH)?,
+            shade_tiled: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_SPECULAR)?,
+            ],
+            aabb_bounds: ComputePipeline::new(ctx, &module, kernels::AABB_BOUNDS)?,
+            aabb_mark: ComputePipeline::new(ctx, &module, kernels::AABB_MARK)?,
+            aabb_compact: ComputePipeline::new(ctx, &module, kernels::AABB_COMPACT)?,
+            aabb_assign: ComputePipeline::new(ctx, &module, kernels::AABB_ASSIGN)?,
+            shade_aabb: [
+                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_DIFFUSE)?,
+                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_SPECULAR)?,
+            ],
         })
     }
 }

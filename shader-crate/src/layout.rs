@@ -308,3 +308,16 @@ pub struct BvhAssignParams {
 }
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// Push constants of the tiled techniques (`tiled.rs`): the frame plus the culling mode
+/// (`tiled::MODE_TILED` or `tiled::MODE_TILED_25D`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TiledParams {
+    pub frame: FrameParams,
+    pub mode: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TiledParams>() == 112);
+const _: () = assert!(core::mem::size_of::<TiledParams>() <= MAX_PUSH_CONSTANT_BYTES);

@@ -42,6 +42,8 @@ pub mod cluster_key;
 #[cfg(feature = "compute")]
 pub mod clustered;
 #[cfg(feature = "compute")]
+pub mod clustered_aabb;
+#[cfg(feature = "compute")]
 pub mod clustered_bvh;
 pub mod coop;
 pub mod debug_view;
@@ -58,6 +60,8 @@ pub mod radix;
 pub mod raster;
 pub mod reconstruct;
 pub mod scan;
+#[cfg(feature = "compute")]
+pub mod tiled;
 
 #[cfg(not(target_arch = "spirv"))]
 pub mod kernels;

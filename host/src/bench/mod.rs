@@ -38,8 +38,8 @@ pub const RASTER_PASSES: [&str; 1] = ["gbuffer"];
 
 /// Columns of `results.csv`.
 pub const CSV_COLUMNS: [&str; 14] = [
-    "scene", "technique", "width", "height", "lights", "frames", "stage", "median_ms", "min_ms", "max_ms", "bytes", "lights_per_pixel_mean",
-    "lights_per_pixel_max", "light_lists",
+    "scene", "technique", "width", "height", "lights", "frames", "stage", "median_ms", "min_ms", "max_ms", "bytes", "light_lists",
+    "lights_per_list_mean", "lights_per_list_max",
 ];
 
 #[derive(Args, Debug, Clone)]
@@ -96,11 +96,12 @@ pub struct Row {
     pub min_ms: f64,
     pub max_ms: f64,
     pub bytes: u64,
-    pub lights_per_pixel_mean: f64,
-    pub lights_per_pixel_max: u32,
-    /// Light lists the technique built: unique clusters, screen tiles, or 1 for brute force
-    /// (one list of every light, shared by all pixels).
+    /// Light lists the technique built: unique or active clusters, screen tiles, or 1 for brute
+    /// force (one list of every light, shared by all pixels).
     pub light_lists: u32,
+    /// Mean and longest list (false positives included: what shading evaluates per list).
+    pub lights_per_list_mean: f64,
+    pub lights_per_list_max: u32,
 }
 
 /// A configuration that was not measured, and why.
@@ -164,16 +165,19 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
     };
     let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
     ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");
-    let mut stats = frame.readback.as_ref().map(render::reference::list_stats).unwrap_or_default();
-    if t == Technique::Deferred {
-        stats.mean_per_pixel = n as f64;
-        stats.max_per_pixel = n as u32;
-    }
     let bytes: u64 = frame.buffers.iter().map(|b| b.1).sum();
     let light_lists = match t {
         Technique::Deferred => 1,
         _ if frame.unique_clusters > 0 => frame.unique_clusters,
         _ => a.width.div_ceil(a.tile_size) * a.height.div_ceil(a.tile_size),
+    };
+    let (lights_per_list_mean, lights_per_list_max) = match (t, frame.readback.as_ref()) {
+        (Technique::Deferred, _) => (n as f64, n as u32),
+        (_, Some(rb)) if !rb.counts.is_empty() => {
+            let st = render::reference::list_stats(rb);
+            (st.mean_per_cluster, st.max_per_cluster)
+        }
+        _ => (frame.light_refs as f64 / light_lists.max(1) as f64, frame.max_list),
     };
     let row = |stage: &str, median_ms: f64, min_ms: f64, max_ms: f64| Row {
         scene: name.to_string(),
@@ -187,9 +191,9 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         min_ms,
         max_ms,
         bytes,
-        lights_per_pixel_mean: stats.mean_per_pixel,
-        lights_per_pixel_max: stats.max_per_pixel,
         light_lists,
+        lights_per_list_mean,
+        lights_per_list_max,
     };
     let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
     let on_main = |p: &&Row| !(frame.overlapped && render::ASYNC_PASSES.contains(&p.stage.as_str()));
@@ -244,7 +248,7 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
     for x in &r.rows {
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{:.4},{},{}",
+            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.4},{}",
             csv_field(&x.scene),
             technique_name(x.technique),
             x.width,
@@ -256,9 +260,9 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
             x.min_ms,
             x.max_ms,
             x.bytes,
-            x.lights_per_pixel_mean,
-            x.lights_per_pixel_max,
-            x.light_lists
+            x.light_lists,
+            x.lights_per_list_mean,
+            x.lights_per_list_max
         )?;
     }
     Ok(())

@@ -13,6 +13,7 @@
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
 pub mod bvh;
+pub mod clustered_aabb;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
@@ -20,6 +21,7 @@ pub mod resources;
 pub mod scan;
 pub mod sort;
 pub mod stats;
+pub mod tiled;
 
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler};
@@ -40,6 +42,15 @@ pub enum Technique {
     /// Clustered deferred with lights Morton-sorted (GPU radix sort) into a 32-ary BVH that each
     /// unique cluster traverses.
     ClusteredBvh,
+    /// Tiled deferred (Olsson & Assarsson 2011; Harada et al. 2012): per screen tile, depth bounds,
+    /// frustum culling into a workgroup-memory list, shading in the same dispatch (`tiled.rs`).
+    Tiled,
+    /// `tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.
+    #[value(name = "tiled-2.5d")]
+    Tiled25d,
+    /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
+    /// depth, staged sphere–box assignment with subgroup-aggregated atomics (`clustered_aabb.rs`).
+    ClusteredAabb,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -110,6 +121,9 @@ pub struct Frame {
     pub pages: u32,
     /// Times a buffer had to grow and the frame re-run.
     pub regrowths: u32,
+    /// Longest light list of one tile or cluster (tiled and clustered-aabb; 0 otherwise). A tiled
+    /// list longer than `shaders::tiled::LIST_CAPACITY` was culled and shaded in several rounds.
+    pub max_list: u32,
     pub buffers: Vec<(String, u64)>,
     pub readback: Option<Readback>,
     pub grid: ClusterGrid,
@@ -185,7 +199,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     ];
     let mut profiler = Profiler::new(ctx, 16)?;
     let mut regrowths = 0;
-    let (mut unique_clusters, mut light_refs, mut pages) = (0, 0, 0);
+    let (mut unique_clusters, mut light_refs, mut pages, mut max_list) = (0, 0, 0, 0);
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
     let mut cluster = None;
     let mut overlapped = false;
@@ -202,6 +216,26 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                     timings_all.push(profiler.results()?);
                 }
             }
+        }
+        Technique::Tiled | Technique::Tiled25d => {
+            let mut t = tiled::Tiled::new(gpu, &params, s.technique == Technique::Tiled25d)?;
+            for f in 0..=s.frames {
+                gpu.run(Some(&mut profiler), |rec| {
+                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
+                    t.record(gpu, rec, &targets, &lights, &materials, &frame_buf, &bounds_buf)
+                })?;
+                if f > 0 || s.frames == 0 {
+                    timings_all.push(profiler.results()?);
+                }
+            }
+            (light_refs, max_list) = t.list_totals()?;
+            buffers.extend(t.sizes());
+        }
+        Technique::ClusteredAabb => {
+            let gbuf = |rec: &mut crate::vk::Recorder<'_>| rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets));
+            let o = clustered_aabb::run(gpu, &params, s.frames, &mut profiler, &gbuf, &targets, &bounds_buf, &lights, &materials, &frame_buf)?;
+            (timings_all, unique_clusters, light_refs, max_list, regrowths) = (o.timings, o.active, o.refs, o.max_list, o.regrowths);
+            buffers.extend(o.buffers);
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
             let bvh = match s.technique {
@@ -279,7 +313,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         None
     };
     let (timings, timing_spread) = median_timings(&timings_all);
-    Ok(Frame { pixels, timings, timing_spread, unique_clusters, light_refs, pages, regrowths, buffers, readback, grid, overlapped })
+    Ok(Frame { pixels, timings, timing_spread, unique_clusters, light_refs, pages, regrowths, max_list, buffers, readback, grid, overlapped })
 }
 
 /// Per-pass median over frames, and the (min, max) beside it (passes matched by position).

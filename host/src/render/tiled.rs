@@ -1,0 +1,66 @@
+//! Host side of `tiled` and `tiled-2.5d` (kernels and algorithm: `shaders::tiled`): one dispatch
+//! of one workgroup per screen tile that culls the lights into a tile-local list in workgroup
+//! memory and shades the tile. No light-list buffer exists, so nothing can overflow: a tile with
+//! more lights than the list holds is culled and shaded in several rounds on the GPU.
+//!
+//! Memory: one word per tile (its light count, for statistics and `--stats`).
+use super::gbuffer::Targets;
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, Recorder, VkResult};
+use anyhow::{bail, Result};
+use shaders::layout::{FrameParams, TiledParams};
+use shaders::tiled::{max_lights_llvmpipe, MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
+
+pub struct Tiled {
+    params: TiledParams,
+    /// Lights in each tile's list (all rounds).
+    pub tile_lights: Buffer,
+}
+
+impl Tiled {
+    /// Checks the tile size and, on llvmpipe, the light count (its loop limiter), and allocates.
+    pub fn new(gpu: &Gpu, frame: &FrameParams, depth_mask: bool) -> Result<Self> {
+        let g = &frame.grid;
+        if g.tile_size > MAX_TILED_TILE {
+            bail!("--tile-size {}: the tiled techniques handle tiles up to {MAX_TILED_TILE} px (4 pixels per invocation of a 16x16 workgroup)", g.tile_size);
+        }
+        let max = max_lights_llvmpipe(g.tile_size);
+        if gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe") && frame.num_lights > max {
+            bail!(
+                "{} lights: on lavapipe (loop limiter: 65 535 iterations per invocation) a tiled frame with {} px tiles handles at most {max}",
+                frame.num_lights,
+                g.tile_size
+            );
+        }
+        let tiles = g.tiles_x * g.tiles_y;
+        Ok(Self {
+            params: TiledParams { frame: *frame, mode: if depth_mask { MODE_TILED_25D } else { MODE_TILED }, _pad: [0; 3] },
+            tile_lights: Buffer::storage(&gpu.ctx, "tile light counts", 4 * tiles as u64)?,
+        })
+    }
+
+    pub fn sizes(&self) -> Vec<(String, u64)> {
+        vec![(self.tile_lights.name.clone(), self.tile_lights.size)]
+    }
+
+    /// Records the culling + shading dispatch.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, g: &Targets, lights: &Buffer, materials: &Buffer, frame: &Buffer, bounds: &Buffer) -> VkResult<()> {
+        let grid = &self.params.frame.grid;
+        rec.pass("culling + shading", |rec| {
+            rec.dispatch(
+                &gpu.kernels.shade_tiled[super::specular_variant(&self.params.frame)],
+                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, lights, materials, frame, bounds, &self.tile_lights],
+                &self.params,
+                [grid.tiles_x, grid.tiles_y, 1],
+            )
+        })
+    }
+
+    /// Light references of the frame (the sum of the tiles' list lengths) and the longest list.
+    pub fn list_totals(&mut self) -> VkResult<(u32, u32)> {
+        let g = &self.params.frame.grid;
+        let counts: Vec<u32> = self.tile_lights.read((g.tiles_x * g.tiles_y) as usize)?;
+        Ok((counts.iter().fold(0u32, |a, &c| a.saturating_add(c)), counts.iter().copied().max().unwrap_or(0)))
+    }
+}
