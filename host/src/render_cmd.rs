@@ -36,7 +36,8 @@ impl View {
 /// Arguments of `render` (see `manylights render --help`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Built-in scene (city, corridor, sponza, bunny), a .toml description or an .obj file.
+    /// Built-in scene (city, corridor, sponza, bunny; `name@view` for a named camera view:
+    /// city@corner, sponza@column), a .toml description or an .obj file.
     #[arg(long, default_value = "city")]
     pub scene: String,
     /// Point lights to generate (when the scene description does not give them).

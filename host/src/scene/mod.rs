@@ -213,10 +213,39 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// Named camera views of the built-in scenes: `(scene, view, what it shows)`.
+pub const VIEWS: [(&str, &str, &str); 2] = [
+    ("city", "corner", "at a street corner: a near building edge against the far avenue (large depth discontinuities)"),
+    ("sponza", "column", "beside a ground-floor column looking down the court: the column against the far end (large depth discontinuities)"),
+];
+
+/// The camera of view `view` of built-in scene `scene` ([`VIEWS`]).
+pub fn view_camera(scene: &str, view: &str) -> Option<Camera> {
+    let (position, target, near, far) = match (scene.to_ascii_lowercase().as_str(), view.to_ascii_lowercase().as_str()) {
+        ("city", "corner") => (Vec3::new(3.2, 1.6, 8.0), Vec3::new(6.0, 1.8, -20.0), 0.1, 1000.0),
+        // About 100 units (≈ 0.8 m) east of the column near (500, 200), looking west.
+        ("sponza", "column") => (Vec3::new(590.0, 160.0, 140.0), Vec3::new(-1300.0, 260.0, 200.0), 5.0, 5000.0),
+        _ => return None,
+    };
+    Some(Camera { position, target, up: Vec3::Y, fov_y_degrees: 60.0, near, far })
+}
+
 impl Scene {
     /// Loads `spec`: a built-in name ([`BUILT_INS`]), or a path to a `.toml` description or an
     /// `.obj` file. `assets_dir` holds `sponza/sponza.obj` and `bunny/bunny.obj`.
+    ///
+    /// A built-in name may carry a camera view, `name@view` ([`VIEWS`]): e.g. `city@corner`, a view
+    /// with a large depth discontinuity.
     pub fn load(spec: &str, assets_dir: &Path) -> Result<Scene> {
+        let with_view = spec.split_once('@').filter(|(name, _)| BUILT_INS.contains(&name.to_ascii_lowercase().as_str()));
+        if let Some((name, view)) = with_view {
+            let mut scene = Self::load(name, assets_dir)?;
+            scene.camera = view_camera(name, view).with_context(|| {
+                format!("unknown view {view:?} of scene {name:?}: expected one of {}", VIEWS.iter().map(|v| format!("{}@{}", v.0, v.1)).collect::<Vec<_>>().join(", "))
+            })?;
+            scene.name = spec.to_string();
+            return Ok(scene);
+        }
         let lower = spec.to_ascii_lowercase();
         let scene = match lower.as_str() {
             "city" => procedural::city(),

@@ -335,3 +335,15 @@ fn bunny_when_present() {
     let d = c.position.distance(centre);
     assert!(c.near < d - 0.08 && c.far > d + 0.08 && d < 1.0, "{c:?}");
 }
+
+#[test]
+fn named_views_set_the_camera_and_unknown_ones_are_named_errors() {
+    let s = Scene::load("city@corner", Path::new(".")).unwrap();
+    assert_eq!(s.name, "city@corner");
+    assert_eq!(s.camera.position, view_camera("city", "corner").unwrap().position);
+    let e = format!("{:#}", Scene::load("city@nowhere", Path::new(".")).unwrap_err());
+    assert!(e.contains("unknown view \"nowhere\"") && e.contains("sponza@column"), "{e}");
+    // '@' in a path is not a view.
+    let e = format!("{:#}", Scene::load("no@such.obj", Path::new(".")).unwrap_err());
+    assert!(!e.contains("unknown view"), "{e}");
+}
