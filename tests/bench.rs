@@ -84,13 +84,19 @@ fn tiny_accuracy_study() {
     assert!(out.status.success(), "study failed:\n{}", String::from_utf8_lossy(&out.stderr));
     let csv = std::fs::read_to_string(dir.join("accuracy.csv")).expect("accuracy.csv");
     let rows: Vec<Vec<String>> = csv.lines().skip(1).map(|l| l.split(',').map(|c| c.trim_matches('"').to_string()).collect()).collect();
-    assert_eq!(rows.len(), 10, "{csv}");
+    assert_eq!(rows.len(), 13, "{csv}");
     let psnr = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap_or_else(|| panic!("{setting}")).get(3).unwrap().parse().unwrap() };
     let max_abs = |setting: &str| -> u32 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[4].parse().unwrap() };
     assert!(max_abs("oct 2×16") <= 1, "the reference setting reproduces brute force");
     for tile in ["16 px", "32 px", "64 px"] {
         assert!(max_abs(tile) <= 1, "tile {tile}: conservative lists give the reference image");
     }
+    let per_cluster = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[12].parse().unwrap() };
+    for test in ["sphere–AABB", "sphere–frustum planes", "exact sphere–frustum"] {
+        assert!(max_abs(test) <= 1, "culling test {test} is conservative: the reference image");
+    }
+    assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–AABB"), "the exact test keeps no more lights than the box");
+    assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–frustum planes"), "the exact test keeps no more lights than the planes");
     let (e2, e3, e4) = (psnr("inverse square cut at ε = 1e-2"), psnr("inverse square cut at ε = 1e-3"), psnr("inverse square cut at ε = 1e-4"));
     assert!(e2 <= e3 && e3 <= e4, "a smaller cut threshold is never less accurate: {e2} {e3} {e4}");
     let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");

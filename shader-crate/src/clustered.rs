@@ -191,10 +191,15 @@ pub fn cluster_box(p: &FrameParams, bounds: &[f32], key: u32) -> ClusterAabb {
 }
 
 /// Lights of cluster `key` whose sphere meets its box (naive: all lights), in index order;
-/// returns the count and calls `emit(n, light)` for each.
+/// returns the count and calls `emit(n, light)` for each. With `EFFECT_CULL_PLANES` or
+/// `EFFECT_CULL_EXACT` (the accuracy study) the cluster's frustum planes or the exact
+/// sphere–frustum test (`cluster_test`) replace the box.
 #[inline]
 pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLight], key: u32, mut emit: impl FnMut(u32, u32)) -> u32 {
     let aabb = cluster_box(p, bounds, key);
+    let mode = p.effects & (EFFECT_CULL_PLANES | EFFECT_CULL_EXACT);
+    let (ci, cj, ck) = p.grid.unpack(key);
+    let frustum = crate::cluster_test::cluster_frustum(&p.grid, bounds, ci, cj, ck);
     let mut n = 0;
     let mut base = 0;
     while base < p.num_lights {
@@ -202,7 +207,15 @@ pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLi
             let l = base + u;
             if l < p.num_lights {
                 let light = lights[l as usize];
-                if lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, &aabb) {
+                let c = Vec3::from_array(light.position);
+                let hit = if mode == 0 {
+                    lighting::sphere_intersects_aabb(c, light.radius, &aabb)
+                } else if mode == EFFECT_CULL_PLANES {
+                    !crate::cluster_test::sphere_outside_planes(&frustum, c, light.radius)
+                } else {
+                    crate::cluster_test::sphere_meets_frustum(&frustum, c, light.radius)
+                };
+                if hit {
                     emit(n, l);
                     n += 1;
                 }

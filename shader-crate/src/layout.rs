@@ -146,6 +146,12 @@ pub const EFFECT_ALPHA_TEST: u32 = 4;
 /// Falloff: plain inverse square `1/(d² + 1)` cut to 0 at the light's radius (the accuracy
 /// study's intensity-threshold cut, `lighting::falloff`) instead of Karis' window.
 pub const EFFECT_INVERSE_SQUARE_CUT: u32 = 8;
+/// Naive clustered assignment tests lights against the cluster's six frustum planes instead of
+/// its AABB (accuracy study: `cluster_test::sphere_outside_planes`).
+pub const EFFECT_CULL_PLANES: u32 = 16;
+/// Naive clustered assignment tests lights against the cluster's frustum exactly (accuracy study:
+/// `cluster_test::sphere_meets_frustum`).
+pub const EFFECT_CULL_EXACT: u32 = 32;
 
 /// A point light with a finite range. In GPU buffers `position` is in view space (the host
 /// transforms lights each frame); in scenes it is in world space.

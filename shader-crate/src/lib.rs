@@ -39,6 +39,7 @@ macro_rules! unroll8 {
 
 pub mod cluster_bounds;
 pub mod cluster_key;
+pub mod cluster_test;
 #[cfg(feature = "compute")]
 pub mod clustered;
 #[cfg(feature = "compute")]

@@ -15,8 +15,10 @@
 //! 3. **tile size** — 16 / 32 / 64 px (the exponential depth slices follow from it, so this is
 //!    also the slice count); reference: brute force. Lists are conservative, so only time and
 //!    lights per cluster change.
-//! 4. **culling test** — only sphere–AABB is implemented; sphere–frustum-planes and exact
-//!    sphere–frustum are not (the report says so).
+//! 4. **culling test** — sphere–AABB, sphere–frustum planes and exact sphere–frustum
+//!    (`shaders::cluster_test`), with `clustered-naive` (the test is all its assignment does):
+//!    lights per cluster (the false positives) against assignment and shading time; reference:
+//!    brute force. All three are conservative, so the image must not change.
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
 use crate::render::{self, Frame, Settings, Technique};
@@ -122,7 +124,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
 pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
     let mut rows = Vec::new();
-    let bar = indicatif::ProgressBar::new((a.scenes.len() * 11) as u64);
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 14) as u64);
     for name in &a.scenes {
         let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
@@ -159,6 +161,10 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
             let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, a.tile_size, p))?;
             let ne = normal_error(&reference, PRECISION_OCT16, &f, p);
             measure("normal encoding", label.into(), &reference, &f, ne);
+        }
+        for (effect, label) in [(0, "sphere–AABB"), (EFFECT_CULL_PLANES, "sphere–frustum planes"), (EFFECT_CULL_EXACT, "exact sphere–frustum")] {
+            let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, PRECISION_OCT16))?;
+            measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
         }
         for tile in [16, 32, 64] {
             let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, PRECISION_OCT16))?;
@@ -206,8 +212,8 @@ pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[Path
         "Each setting renders with `{}` and is compared with a brute-force reference at the knob's most accurate \
          setting (normal encoding, tile size: 2×16-bit normals and the window falloff; falloff: the uncut inverse \
          square). PSNR over 8-bit RGB (∞ = identical), max |Δ| in 1/255, share of pixels with any channel differing. \
-         Not measured: a float32 normal target (the G-buffer stores 32-bit octahedral codes; 2×16 is the reference) \
-         and the sphere–frustum-plane and exact sphere–frustum culling tests (only sphere–AABB is implemented).\n",
+         Not measured: a float32 normal target (the G-buffer stores 32-bit octahedral codes; 2×16 is the reference). \
+         The culling tests run with `clustered-naive`, whose assignment is nothing but the test.\n",
         technique_name(Technique::ClusteredBvh)
     );
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
@@ -260,7 +266,7 @@ pub fn pareto_plots(rows: &[AccuracyRow], dir: &Path) -> Result<Vec<PathBuf>> {
         let mut front: Vec<(f64, f64)> = pts.iter().filter(|p| !pts.iter().any(|q| q.1 <= p.1 && q.2 <= p.2 && (q.1 < p.1 || q.2 < p.2))).map(|p| (p.1, p.2)).collect();
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         chart.draw_series(LineSeries::new(front, BLACK.stroke_width(1)))?.label("Pareto front").legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-        for (i, knob) in ["normal encoding", "tile size", "falloff"].iter().enumerate() {
+        for (i, knob) in ["normal encoding", "culling test", "tile size", "falloff"].iter().enumerate() {
             let colour = Palette99::pick(i).mix(1.0);
             let mine: Vec<_> = pts.iter().filter(|p| p.0.knob == *knob).collect();
             chart
