@@ -123,24 +123,14 @@ pub fn sphere_meets_frustum(f: &ClusterFrustum, c: Vec3, r: f32) -> bool {
     let d0 = if d0 > 0.0 { d0 } else { 0.0 };
     let g = ClusterFrustum { sx: f.sx, sy: f.sy, d: [d0, if d1 > d0 { d1 } else { d0 }] };
     let p = plane_distances(&g, c);
-    let outside = |q: &[f32; 6], skip: usize| {
-        let mut any = false;
-        let mut m = 0;
-        while m < 6 {
-            if m != skip && q[m] > e {
-                any = true;
-            }
-            m += 1;
-        }
-        any
-    };
-    if !outside(&p, 6) {
+    if !outside_except(&p, 6, e) {
         return true; // inside every plane
     }
     let limit = (r + e) * (r + e);
     // Faces: project onto each plane the centre lies outside of; inside the face if the
-    // projection lies inside the other five planes.
-    let normals = [
+    // projection lies inside the other five planes. Straight-line code, no loops: llvmpipe's
+    // loop limiter counts every iteration of an invocation, and this runs once per light.
+    let n = [
         Vec3::new(-1.0, 0.0, -g.sx[0]) / (1.0 + g.sx[0] * g.sx[0]).sqrt(),
         Vec3::new(1.0, 0.0, g.sx[1]) / (1.0 + g.sx[1] * g.sx[1]).sqrt(),
         Vec3::new(0.0, -1.0, -g.sy[0]) / (1.0 + g.sy[0] * g.sy[0]).sqrt(),
@@ -148,37 +138,30 @@ pub fn sphere_meets_frustum(f: &ClusterFrustum, c: Vec3, r: f32) -> bool {
         Vec3::new(0.0, 0.0, 1.0),
         Vec3::new(0.0, 0.0, -1.0),
     ];
-    let mut face = 0;
-    while face < 6 {
-        if p[face] > 0.0 && p[face] * p[face] <= limit {
-            let q = c - normals[face] * p[face];
-            if !outside(&plane_distances(&g, q), face) {
-                return true;
-            }
-        }
-        face += 1;
+    let on_face = |face: usize| p[face] > 0.0 && p[face] * p[face] <= limit && !outside_except(&plane_distances(&g, c - n[face] * p[face]), face, e);
+    if on_face(0) || on_face(1) || on_face(2) || on_face(3) || on_face(4) || on_face(5) {
+        return true;
     }
-    // Edges: 4 along depth, 4 on each depth face.
-    let mut best = f32::MAX;
-    let mut xi = 0;
-    while xi < 2 {
-        let mut yi = 0;
-        while yi < 2 {
-            let a = segment_distance2(c, corner(&g, xi, yi, 0), corner(&g, xi, yi, 1));
-            best = if a < best { a } else { best };
-            let mut di = 0;
-            while di < 2 {
-                let b = segment_distance2(c, corner(&g, xi, yi, di), corner(&g, 1 - xi, yi, di));
-                let cc = segment_distance2(c, corner(&g, xi, yi, di), corner(&g, xi, 1 - yi, di));
-                best = if b < best { b } else { best };
-                best = if cc < best { cc } else { best };
-                di += 1;
-            }
-            yi += 1;
-        }
-        xi += 1;
-    }
-    best <= limit
+    // Edges: 4 along depth, 4 on each depth face (the vertices are their end points).
+    let k = |xi: usize, yi: usize, di: usize| corner(&g, xi, yi, di);
+    let m = |a: f32, b: f32| if a < b { a } else { b };
+    let depth_edges = m(
+        m(segment_distance2(c, k(0, 0, 0), k(0, 0, 1)), segment_distance2(c, k(1, 0, 0), k(1, 0, 1))),
+        m(segment_distance2(c, k(0, 1, 0), k(0, 1, 1)), segment_distance2(c, k(1, 1, 0), k(1, 1, 1))),
+    );
+    let face_edges = |di: usize| {
+        m(
+            m(segment_distance2(c, k(0, 0, di), k(1, 0, di)), segment_distance2(c, k(0, 1, di), k(1, 1, di))),
+            m(segment_distance2(c, k(0, 0, di), k(0, 1, di)), segment_distance2(c, k(1, 0, di), k(1, 1, di))),
+        )
+    };
+    m(depth_edges, m(face_edges(0), face_edges(1))) <= limit
+}
+
+/// Whether any signed distance but `skip` exceeds `e` (the point is outside that plane).
+#[inline]
+fn outside_except(q: &[f32; 6], skip: usize, e: f32) -> bool {
+    (skip != 0 && q[0] > e) || (skip != 1 && q[1] > e) || (skip != 2 && q[2] > e) || (skip != 3 && q[3] > e) || (skip != 4 && q[4] > e) || (skip != 5 && q[5] > e)
 }
 
 #[cfg(test)]

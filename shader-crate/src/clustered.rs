@@ -195,35 +195,41 @@ pub fn cluster_box(p: &FrameParams, bounds: &[f32], key: u32) -> ClusterAabb {
 /// `EFFECT_CULL_EXACT` (the accuracy study) the cluster's frustum planes or the exact
 /// sphere–frustum test (`cluster_test`) replace the box.
 #[inline]
-pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLight], key: u32, mut emit: impl FnMut(u32, u32)) -> u32 {
-    let aabb = cluster_box(p, bounds, key);
+pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLight], key: u32, emit: impl FnMut(u32, u32)) -> u32 {
+    // The mode is uniform: one loop per test, so the default loop carries no other test's code.
     let mode = p.effects & (EFFECT_CULL_PLANES | EFFECT_CULL_EXACT);
-    let (ci, cj, ck) = p.grid.unpack(key);
-    let frustum = crate::cluster_test::cluster_frustum(&p.grid, bounds, ci, cj, ck);
-    let mut n = 0;
+    if mode == 0 {
+        let aabb = cluster_box(p, bounds, key);
+        return lights_meeting(p.num_lights, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb));
+    }
+    let (i, j, k) = p.grid.unpack(key);
+    let frustum = crate::cluster_test::cluster_frustum(&p.grid, bounds, i, j, k);
+    if mode == EFFECT_CULL_PLANES {
+        lights_meeting(p.num_lights, lights, emit, |c, r| !crate::cluster_test::sphere_outside_planes(&frustum, c, r))
+    } else {
+        lights_meeting(p.num_lights, lights, emit, |c, r| crate::cluster_test::sphere_meets_frustum(&frustum, c, r))
+    }
+}
+
+/// Lights `0..n` passing `test(centre, radius)`, in index order, 8 per loop iteration.
+#[inline]
+fn lights_meeting(n: u32, lights: &[PointLight], mut emit: impl FnMut(u32, u32), test: impl Fn(Vec3, f32) -> bool) -> u32 {
+    let mut found = 0;
     let mut base = 0;
-    while base < p.num_lights {
+    while base < n {
         unroll8!(u => {
             let l = base + u;
-            if l < p.num_lights {
+            if l < n {
                 let light = lights[l as usize];
-                let c = Vec3::from_array(light.position);
-                let hit = if mode == 0 {
-                    lighting::sphere_intersects_aabb(c, light.radius, &aabb)
-                } else if mode == EFFECT_CULL_PLANES {
-                    !crate::cluster_test::sphere_outside_planes(&frustum, c, light.radius)
-                } else {
-                    crate::cluster_test::sphere_meets_frustum(&frustum, c, light.radius)
-                };
-                if hit {
-                    emit(n, l);
-                    n += 1;
+                if test(Vec3::from_array(light.position), light.radius) {
+                    emit(found, l);
+                    found += 1;
                 }
             }
         });
         base += LIGHTS_PER_ITERATION;
     }
-    n
+    found
 }
 
 /// 6. Naive light assignment, pass 1: lights per unique cluster.
