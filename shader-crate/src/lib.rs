@@ -49,6 +49,8 @@ pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]
 pub mod entries;
+#[cfg(feature = "compute")]
+pub mod forward_plus;
 pub mod layout;
 pub mod light_bvh;
 pub mod lighting;
@@ -58,6 +60,8 @@ pub mod page_table;
 pub mod radix;
 #[cfg(feature = "graphics")]
 pub mod raster;
+#[cfg(feature = "graphics")]
+pub mod raster_forward;
 pub mod reconstruct;
 pub mod scan;
 #[cfg(feature = "compute")]

@@ -14,6 +14,7 @@
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
 pub mod bvh;
 pub mod clustered_aabb;
+pub mod forward_plus;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
@@ -51,6 +52,9 @@ pub enum Technique {
     /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
     /// depth, staged sphere–box assignment with subgroup-aggregated atomics (`clustered_aabb.rs`).
     ClusteredAabb,
+    /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists,
+    /// forward raster shading with depth test EQUAL (`forward_plus.rs`).
+    ForwardPlus,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -219,6 +223,12 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             let gbuf = |rec: &mut crate::vk::Recorder<'_>| rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets));
             let o = clustered_aabb::run(gpu, &params, s.frames, &mut profiler, &gbuf, &targets, &bounds_buf, &lights, &materials, &frame_buf)?;
             (timings_all, unique_clusters, light_refs, max_list, regrowths) = (o.timings, o.active, o.refs, o.max_list, o.regrowths);
+            buffers.extend(o.buffers);
+        }
+        Technique::ForwardPlus => {
+            let sc = forward_plus::SceneGpu { geometry: &geometry, indices: scene.indices, textures: &textures, camera: &camera, lights: &lights, materials: &materials };
+            let o = forward_plus::run(gpu, &params, s.frames, &mut profiler, &sc, &targets, &frame_buf)?;
+            (timings_all, light_refs, regrowths) = (o.timings, o.refs, o.regrowths);
             buffers.extend(o.buffers);
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
