@@ -90,7 +90,9 @@ fn unorm8(x: f32) -> f32 {
     ((c * 255.0 + 0.5) as u32) as f32 * (1.0 / 255.0)
 }
 
-/// The forward shading of one fragment (module docs): the sum over its tile's list.
+/// The forward shading of one fragment (module docs): the sum over its tile's list. Views: the
+/// shaded image and the heatmap (lights in the tile's list); the other debug views show the shaded
+/// image.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn forward_colour(
