@@ -12,7 +12,7 @@ use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
 use std::path::PathBuf;
 
 /// Every technique of this file.
-const TECHNIQUES: [Technique; 3] = [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb];
+const TECHNIQUES: [Technique; 4] = [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb, Technique::ForwardPlus];
 
 fn assets() -> PathBuf {
     std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))
@@ -35,10 +35,15 @@ fn worst_channel(a: &[u32], b: &[u32]) -> u32 {
 /// Renders the reference and every technique (16 px tiles, the tiled default of the papers) and
 /// asserts equality; returns the frames in [`TECHNIQUES`] order.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Vec<Frame> {
+    assert_equal_for(gpu, scene, lights, w, h, what, &TECHNIQUES)
+}
+
+/// As [`assert_equal_to_reference`] for the given techniques.
+fn assert_equal_for(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str, techniques: &[Technique]) -> Vec<Frame> {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred, 16));
     let lit = reference.pixels.iter().filter(|&&p| p & 0x00ff_ffff > 0x0004_0404).count();
     assert!(lit * 10 > reference.pixels.len(), "{what}: the reference should be lit ({lit} of {} pixels)", reference.pixels.len());
-    let frames: Vec<Frame> = TECHNIQUES
+    let frames: Vec<Frame> = techniques
         .iter()
         .map(|&t| {
             let f = frame(gpu, scene, lights, &settings(w, h, t, 16));
@@ -197,16 +202,25 @@ fn tile_sizes_and_odd_resolutions() {
 
 /// More lights than one lavapipe loop may iterate (65 535): the batched culling and the 16-wide
 /// light loops must still visit every light (lavapipe's loop limiter drops the rest silently).
+/// Forward+ walks its lists one node per iteration, so lavapipe refuses it such a frame.
 #[test]
 fn seventy_thousand_lights_all_visited() {
     let gpu = common::gpu();
     let scene = city();
     let l = lights::uniform(&scene, 70_000, 13).unwrap();
-    assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
+    let llvmpipe = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let techniques: Vec<Technique> = TECHNIQUES.iter().copied().filter(|&t| !(llvmpipe && t == Technique::ForwardPlus)).collect();
+    assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &techniques);
+    if llvmpipe {
+        let flat = flatten(&scene, PRECISION_OCT16).unwrap();
+        let err = render::render(&gpu, &scene_input(&scene, &flat, &l), &settings(48, 27, Technique::ForwardPlus, 16)).err().expect("forward+ must refuse 70k lights on lavapipe");
+        assert!(format!("{err:#}").contains("65535"), "{err:#}");
+    }
 }
 
 /// The heatmap view: clustered-aabb's lists are those of clustered-naive (same boxes, same test),
-/// so the heatmaps agree pixel for pixel; a tiled heatmap is constant over each tile's geometry.
+/// and forward+'s linked lists those of tiled (same depth bounds and frustum test), so those
+/// heatmaps agree pixel for pixel; a tiled heatmap is constant over each tile's geometry.
 #[test]
 fn heatmaps() {
     let gpu = common::gpu();
@@ -215,6 +229,7 @@ fn heatmaps() {
     let (w, h) = (96, 54);
     let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: shaders::layout::VIEW_HEATMAP, ..settings(w, h, t, tile) }).pixels;
     assert_eq!(heat(Technique::ClusteredAabb, 32), heat(Technique::ClusteredNaive, 32), "clustered-aabb and clustered-naive heatmaps");
+    assert_eq!(heat(Technique::ForwardPlus, 16), heat(Technique::Tiled, 16), "forward+ and tiled heatmaps");
     let background = shaders::clustered::BACKGROUND_RGBA8;
     for t in [Technique::Tiled, Technique::Tiled25d] {
         let px = heat(t, 16);

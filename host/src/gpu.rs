@@ -40,6 +40,7 @@ pub struct Kernels {
     pub aabb_compact: ComputePipeline<FrameParams>,
     pub aabb_assign: ComputePipeline<FrameParams>,
     pub shade_aabb: [ComputePipeline<FrameParams>; 2],
+    pub forward_plus_cull: ComputePipeline<TiledParams>,
 }
 
 impl Kernels {
@@ -87,6 +88,7 @@ impl Kernels {
                 ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_DIFFUSE)?,
                 ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_SPECULAR)?,
             ],
+            forward_plus_cull: ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL)?,
         })
     }
 }

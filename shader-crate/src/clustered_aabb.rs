@@ -51,7 +51,7 @@ const LIGHT_WORDS: u32 = 8;
 /// Workgroup memory of the assignment: one batch of lights.
 pub const AABB_SHARED_WORDS: usize = (LIGHT_BATCH * LIGHT_WORDS) as usize;
 const _: () = assert!(AABB_SHARED_WORDS * 4 <= 32 * 1024, "lavapipe has 32 KiB of workgroup memory");
-const _: () = assert!(LIGHT_BATCH % 16 == 0);
+const _: () = assert!(LIGHT_BATCH.is_multiple_of(16));
 
 /// Pixel cluster index of a background pixel.
 pub const NO_CLUSTER: u32 = u32::MAX;
@@ -277,6 +277,7 @@ pub fn aabb_bounds(
 
 /// 2a. Each pixel's cluster, flagged.
 #[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
 pub fn aabb_mark(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,

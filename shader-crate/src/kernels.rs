@@ -85,3 +85,6 @@ pub const AABB_COMPACT: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_
 pub const AABB_ASSIGN: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_assign", 7, [256, 1, 1], true);
 pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_diffuse", 12);
 pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 12);
+
+// Forward+ (`forward_plus.rs`): tiled culling into per-tile linked lists.
+pub const FORWARD_PLUS_CULL: Kernel<TiledParams> = Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tiled::TILED_WORKGROUP, 1, 1], true);

@@ -327,3 +327,15 @@ pub struct TiledParams {
 }
 const _: () = assert!(core::mem::size_of::<TiledParams>() == 112);
 const _: () = assert!(core::mem::size_of::<TiledParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// Push constants of the Forward+ raster passes (`raster_forward.rs`): the frame and the draw;
+/// `frame.count` carries the draw's index (the pre-pass records each pixel's winning draw).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct ForwardParams {
+    pub frame: FrameParams,
+    pub draw: DrawParams,
+}
+const _: () = assert!(core::mem::size_of::<ForwardParams>() == 128);
+const _: () = assert!(core::mem::size_of::<ForwardParams>() <= MAX_PUSH_CONSTANT_BYTES);

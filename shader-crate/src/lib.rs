@@ -50,6 +50,8 @@ pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]
 pub mod entries;
+#[cfg(feature = "compute")]
+pub mod forward_plus;
 pub mod layout;
 pub mod light_bvh;
 pub mod lighting;
@@ -59,6 +61,8 @@ pub mod page_table;
 pub mod radix;
 #[cfg(feature = "graphics")]
 pub mod raster;
+#[cfg(feature = "graphics")]
+pub mod raster_forward;
 pub mod reconstruct;
 pub mod scan;
 #[cfg(feature = "compute")]

@@ -63,6 +63,15 @@ pub fn sample_draw_uniform(_texture: &Texture2d, _uv: Vec2) -> Vec4 {
 /// Alpha-mask coverage below which a fragment is cut out.
 pub const ALPHA_CUTOFF: f32 = 0.5;
 
+/// Clip-space position of vertex `i`: `proj · (view · p)`. The one definition every vertex shader
+/// uses, so a depth pre-pass and a later pass produce the same depths (Forward+ tests EQUAL).
+#[inline]
+pub fn clip_position(positions: &[f32], camera: &RasterCamera, i: usize) -> Vec4 {
+    let view = Mat4::from_cols_array_2d(&camera.view);
+    let proj = Mat4::from_cols_array_2d(&camera.proj);
+    proj * (view * fetch3(positions, i).extend(1.0))
+}
+
 #[spirv(vertex)]
 #[allow(clippy::too_many_arguments)]
 pub fn gbuffer_vs(
@@ -76,9 +85,7 @@ pub fn gbuffer_vs(
 ) {
     let i = vertex_index as usize;
     let view = Mat4::from_cols_array_2d(&camera.view);
-    let proj = Mat4::from_cols_array_2d(&camera.proj);
-    let p_view = view * fetch3(positions, i).extend(1.0);
-    *out_position = proj * p_view;
+    *out_position = clip_position(positions, camera, i);
     *out_normal = (view * fetch3(normals, i).extend(0.0)).truncate();
     // uvs (binding 2) are bound for the textured variant; the untextured one reads none.
     let _ = uvs;

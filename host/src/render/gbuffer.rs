@@ -37,11 +37,13 @@ pub fn pipelines(ctx: &Context) -> VkResult<[GraphicsPipeline; 3]> {
                 vertex_entry,
                 fragment_entry,
                 vertex_storage_buffers: 4,
+                fragment_storage_buffers: 0,
                 fragment_samplers,
                 push_constant_bytes: std::mem::size_of::<DrawParams>() as u32,
                 color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT],
                 depth_format: DEPTH_FORMAT,
                 depth_compare: vk::CompareOp::GREATER,
+                depth_write: true,
             },
         )
     };
@@ -101,7 +103,7 @@ impl Textures {
         Ok(Self { images, white, sampler: Sampler::linear_repeat(ctx)? })
     }
 
-    fn info(&self, index: Option<u32>) -> [vk::DescriptorImageInfo; 1] {
+    pub fn info(&self, index: Option<u32>) -> [vk::DescriptorImageInfo; 1] {
         let img = index.and_then(|i| self.images.get(i as usize)).unwrap_or(&self.white);
         [vk::DescriptorImageInfo::default()
             .sampler(self.sampler.raw)

@@ -9,11 +9,15 @@
 //!    AABB), as counts → scan → fill; offsets + counts give each cluster's list.
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
+//! The baselines of issue 5 live in their own files, one match arm each: `tiled.rs` (`tiled`,
+//! `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`.
+//!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
 pub mod bvh;
 pub mod clustered_aabb;
+pub mod forward_plus;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
@@ -51,6 +55,9 @@ pub enum Technique {
     /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
     /// depth, staged sphere–box assignment with subgroup-aggregated atomics (`clustered_aabb.rs`).
     ClusteredAabb,
+    /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists,
+    /// forward raster shading with depth test EQUAL (`forward_plus.rs`).
+    ForwardPlus,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -235,6 +242,12 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             let gbuf = |rec: &mut crate::vk::Recorder<'_>| rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets));
             let o = clustered_aabb::run(gpu, &params, s.frames, &mut profiler, &gbuf, &targets, &bounds_buf, &lights, &materials, &frame_buf)?;
             (timings_all, unique_clusters, light_refs, max_list, regrowths) = (o.timings, o.active, o.refs, o.max_list, o.regrowths);
+            buffers.extend(o.buffers);
+        }
+        Technique::ForwardPlus => {
+            let sc = forward_plus::SceneGpu { geometry: &geometry, indices: scene.indices, textures: &textures, camera: &camera, lights: &lights, materials: &materials };
+            let o = forward_plus::run(gpu, &params, s.frames, &mut profiler, &sc, &targets, &frame_buf)?;
+            (timings_all, light_refs, regrowths) = (o.timings, o.refs, o.regrowths);
             buffers.extend(o.buffers);
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {

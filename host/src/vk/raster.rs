@@ -13,6 +13,8 @@ pub struct RasterDesc<'a> {
     pub fragment_entry: &'a str,
     /// Storage buffers read by the vertex stage (set 0, bindings `0..n`).
     pub vertex_storage_buffers: u32,
+    /// Storage buffers read by the fragment stage (bindings after the vertex stage's).
+    pub fragment_storage_buffers: u32,
     /// Combined image samplers read by the fragment stage (bindings after the storage buffers).
     pub fragment_samplers: u32,
     /// Push-constant bytes (fragment stage).
@@ -20,6 +22,8 @@ pub struct RasterDesc<'a> {
     pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     pub depth_compare: vk::CompareOp,
+    /// Whether passing fragments write depth (off for a pass over a pre-pass's depth).
+    pub depth_write: bool,
 }
 
 pub struct GraphicsPipeline {
@@ -41,9 +45,16 @@ impl GraphicsPipeline {
                     .stage_flags(vk::ShaderStageFlags::VERTEX)
             })
             .collect();
+        bindings.extend((0..desc.fragment_storage_buffers).map(|b| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(desc.vertex_storage_buffers + b)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
+        }));
         bindings.extend((0..desc.fragment_samplers).map(|s| {
             vk::DescriptorSetLayoutBinding::default()
-                .binding(desc.vertex_storage_buffers + s)
+                .binding(desc.vertex_storage_buffers + desc.fragment_storage_buffers + s)
                 .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::FRAGMENT)
@@ -81,7 +92,7 @@ impl GraphicsPipeline {
         let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(true)
-            .depth_write_enable(true)
+            .depth_write_enable(desc.depth_write)
             .depth_compare_op(desc.depth_compare);
         let blend: Vec<_> = desc
             .color_formats

@@ -1,0 +1,95 @@
+//! CPU tests of `forward_plus`: the emulated culling (widths 4…64) builds, per tile, a linked list
+//! holding exactly the lights the tile's frustum test keeps (each once) — every light touching a
+//! pixel among them — and with too few nodes links nothing past the capacity while the counter
+//! still reaches the frame's need.
+use super::*;
+use crate::coop::cpu::{run_workgroups, Emulation};
+use crate::lighting::light_touches;
+use crate::tiled::tests::{frame_params, gbuffer, test_lights, Rng};
+use crate::tiled::{DepthCells, TileFrustum, TILED_WORKGROUP};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+struct Nodes<'a>(&'a [AtomicU32]);
+
+impl ListSink for Nodes<'_> {
+    fn put(&mut self, i: u32, v: u32) {
+        self.0[i as usize].store(v, Ordering::Relaxed);
+    }
+}
+
+/// The tile's frustum and mask as the kernel computes them, on the CPU.
+fn tile_test(g: &ClusterGrid, depth: &[f32], tx: u32, ty: u32) -> Option<(TileFrustum, DepthCells, u32)> {
+    let (x0, x1, y0, y1) = crate::tiled::tile_rect(g, tx, ty);
+    let d: Vec<f32> = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (y * g.width + x) as usize))
+        .filter(|&i| !reconstruct::is_background(depth[i]))
+        .map(|i| reconstruct::distance_from_depth(g.near, depth[i]))
+        .collect();
+    let lo = d.iter().cloned().reduce(f32::min)?;
+    let hi = d.iter().cloned().reduce(f32::max)?;
+    let cells = depth_cells(lo, hi);
+    Some((tile_frustum(g, tx, ty, lo, hi), cells, d.iter().fold(0, |m, &x| m | 1u32 << depth_cell(&cells, x))))
+}
+
+#[test]
+fn emulated_lists_hold_exactly_the_kept_lights() {
+    let g = ClusterGrid::new(40, 24, 16, 0.1, 1000.0, core::f32::consts::FRAC_PI_3).unwrap();
+    let mut rng = Rng(17);
+    let gb = gbuffer(&g, &mut rng);
+    let lights = test_lights(&g, &mut rng, 400, 700);
+    let tiles = g.tiles_x * g.tiles_y;
+    for (width, mode) in [(4, MODE_TILED_25D), (8, 0), (16, MODE_TILED_25D), (32, 0), (64, MODE_TILED_25D)] {
+        let p = TiledParams { frame: frame_params(g, lights.len() as u32), mode, _pad: [0; 3] };
+        // The frame's need, from the CPU tests.
+        let expected: Vec<Vec<u32>> = (0..tiles)
+            .map(|t| match tile_test(&g, &gb.depth, t % g.tiles_x, t / g.tiles_x) {
+                None => vec![],
+                Some((f, cells, mask)) => (0..lights.len() as u32).filter(|&l| keep_light(&f, &cells, mask, mode, &lights[l as usize])).collect(),
+            })
+            .collect();
+        let need: u32 = expected.iter().map(|e| e.len() as u32).sum();
+        for capacity in [need, need / 3] {
+            let heads: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(NO_NODE)).collect();
+            let nodes: Vec<AtomicU32> = (0..2 * need).map(|_| AtomicU32::new(0xdead)).collect();
+            let counter = AtomicU32::new(0);
+            let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: TILED_SHARED_WORDS };
+            run_workgroups(emu, tiles, |t, c, s| {
+                let (mut ctr, mut head, mut sink) = (&counter, &heads[t as usize], Nodes(&nodes));
+                cull_tile(c, s, &p, t % g.tiles_x, t / g.tiles_x, &gb.depth, &lights, &mut ctr, &mut head, &mut sink, capacity)
+            });
+            assert_eq!(counter.load(Ordering::Relaxed), need, "width {width}: the counter ends at the nodes needed");
+            let mut linked = 0;
+            for t in 0..tiles as usize {
+                let mut got = Vec::new();
+                let mut node = heads[t].load(Ordering::Relaxed);
+                while node != NO_NODE {
+                    assert!(node < capacity, "width {width}: node {node} linked past the capacity {capacity}");
+                    got.push(nodes[2 * node as usize].load(Ordering::Relaxed));
+                    node = nodes[2 * node as usize + 1].load(Ordering::Relaxed);
+                }
+                linked += got.len() as u32;
+                got.sort_unstable();
+                if capacity == need {
+                    assert_eq!(got, expected[t], "width {width}, tile {t}");
+                }
+            }
+            assert_eq!(linked, capacity.min(need), "width {width}: every node within the capacity is linked once");
+        }
+        // The kept lights include every light touching a pixel of the tile.
+        for i in 0..(g.width * g.height) as usize {
+            if reconstruct::is_background(gb.depth[i]) {
+                continue;
+            }
+            let (px, py) = (i as u32 % g.width, i as u32 / g.width);
+            let pos = reconstruct::view_position(&g, px, py, reconstruct::distance_from_depth(g.near, gb.depth[i]));
+            let (tx, ty) = g.tile_of_pixel(px, py);
+            let list = &expected[(ty * g.tiles_x + tx) as usize];
+            for (l, light) in lights.iter().enumerate() {
+                if light_touches(light, pos) {
+                    assert!(list.binary_search(&(l as u32)).is_ok(), "light {l} touches pixel {i} but is not in its tile's list");
+                }
+            }
+        }
+    }
+    assert_eq!(crate::raster_forward::BACKGROUND_RGBA8, crate::clustered::BACKGROUND_RGBA8);
+}

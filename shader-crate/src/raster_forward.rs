@@ -1,0 +1,208 @@
+//! Raster shaders of Forward+ ([`crate::forward_plus`] has the algorithm): the depth pre-pass and
+//! the forward shading pass. Every vertex shader computes its position with the one function
+//! [`clip_position`], and the forward pass reuses the G-buffer vertex shaders ([`crate::raster`]),
+//! so the depths agree with the pre-pass (the forward pass tests EQUAL) and with the G-buffer of
+//! the deferred techniques (the tests compare the images).
+//!
+//! The forward fragment shades with exactly the deferred inputs: the position from the pixel
+//! centre and the fragment's depth through [`reconstruct`] (what the deferred passes compute from
+//! the depth buffer), the normal encoded and decoded at the G-buffer precision, the albedo
+//! quantised to 8 bits as the `RGBA8_UNORM` G-buffer target stores it — so the image equals the
+//! deferred reference, not just a similar forward rendering.
+use crate::layout::*;
+use crate::octahedral::{self, Precision};
+use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, Texture2d, ALPHA_CUTOFF};
+use crate::{lighting, reconstruct};
+use spirv_std::glam::{Vec2, Vec3, Vec4};
+use spirv_std::spirv;
+
+/// Colour of pixels that show no geometry (the value of `clustered::BACKGROUND_RGBA8`).
+pub const BACKGROUND_RGBA8: u32 = 0xff_20_18_18;
+/// End of a tile's light list (`forward_plus::NO_NODE`).
+const NO_NODE: u32 = u32::MAX;
+
+/// Depth pre-pass vertex shader: the position only ([`clip_position`], as every vertex shader).
+#[spirv(vertex)]
+pub fn depth_vs(
+    #[spirv(vertex_index)] vertex_index: i32,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] camera: &RasterCamera,
+    #[spirv(position)] out_position: &mut Vec4,
+) {
+    *out_position = clip_position(positions, camera, vertex_index as usize);
+}
+
+/// Depth pre-pass vertex shader of alpha-tested draws: position and texture coordinate.
+#[spirv(vertex)]
+pub fn depth_vs_uv(
+    #[spirv(vertex_index)] vertex_index: i32,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] uvs: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] camera: &RasterCamera,
+    #[spirv(position)] out_position: &mut Vec4,
+    out_uv: &mut Vec2,
+) {
+    let i = vertex_index as usize;
+    *out_position = clip_position(positions, camera, i);
+    *out_uv = Vec2::new(uvs[2 * i], uvs[2 * i + 1]);
+}
+
+/// Depth pre-pass of opaque draws: depth, and the index of the draw that wins the pixel
+/// ([`ForwardParams`]`::frame.count`). With the G-buffer's test (GREATER) the first-drawn of
+/// coplanar surfaces wins, as in the G-buffer; the forward pass shades only that draw's fragment
+/// (EQUAL alone would let the last coplanar one overwrite it).
+#[spirv(fragment)]
+pub fn depth_fs(#[spirv(push_constant)] p: &ForwardParams, out_draw: &mut u32) {
+    *out_draw = p.frame.count;
+}
+
+/// Depth pre-pass of alpha-tested draws: fragments below the mask's cut-off write nothing.
+#[spirv(fragment)]
+pub fn depth_fs_masked(in_uv: Vec2, #[spirv(push_constant)] p: &ForwardParams, #[spirv(descriptor_set = 0, binding = 5)] mask_map: &Texture2d, out_draw: &mut u32) {
+    if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
+        spirv_std::arch::demote_to_helper_invocation();
+    }
+    *out_draw = p.frame.count;
+}
+
+/// Coplanar fragments of other draws than the pre-pass's winner (`winners`: its per-pixel draw
+/// index) are demoted, so exactly the fragment the G-buffer would keep is shaded.
+#[inline]
+fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
+    let (px, py) = (frag.x as u32, frag.y as u32);
+    if winners[(py * p.frame.grid.width + px) as usize] != p.frame.count {
+        spirv_std::arch::demote_to_helper_invocation();
+    }
+}
+
+/// A channel as the `UNORM8` G-buffer stores and the shading pass decodes it.
+#[inline]
+fn unorm8(x: f32) -> f32 {
+    let c = if x > 0.0 {
+        if x < 1.0 {
+            x
+        } else {
+            1.0
+        }
+    } else {
+        0.0
+    };
+    ((c * 255.0 + 0.5) as u32) as f32 * (1.0 / 255.0)
+}
+
+/// The forward shading of one fragment (module docs): the sum over its tile's list. Views: the
+/// shaded image and the heatmap (lights in the tile's list); the other debug views show the shaded
+/// image.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn forward_colour(
+    frag: Vec4,
+    in_normal: Vec3,
+    front_facing: bool,
+    texel: Vec3,
+    p: &ForwardParams,
+    heads: &[u32],
+    nodes: &[u32],
+    lights: &[PointLight],
+    materials: &[MaterialGpu],
+    counters: &[u32],
+) -> u32 {
+    let f = &p.frame;
+    let g = &f.grid;
+    // An overflowed frame is re-run with more nodes: draw nothing from a partial list.
+    if counters[0] > f.light_capacity {
+        return BACKGROUND_RGBA8;
+    }
+    let (px, py) = (frag.x as u32, frag.y as u32);
+    let pos = reconstruct::view_position(g, px, py, reconstruct::distance_from_depth(g.near, frag.z));
+    let facing = if front_facing { in_normal } else { -in_normal };
+    let word = encode_gbuffer_normal(facing, p.draw.normal_precision);
+    let n = Vec3::from_array(octahedral::decode([word, 0, 0], Precision::from_u32(f.normal_precision)));
+    let a = Vec3::from_array(p.draw.albedo) * texel;
+    let albedo = Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z));
+    let mat = materials[p.draw.material as usize];
+    let effects = f.effects & EFFECT_SPECULAR;
+    let (tx, ty) = g.tile_of_pixel(px, py);
+    let mut node = heads[(ty * g.tiles_x + tx) as usize];
+    let mut sum = Vec3::ZERO;
+    let mut count = 0;
+    while node != NO_NODE {
+        let light = lights[nodes[2 * node as usize] as usize];
+        sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, effects);
+        count += 1;
+        node = nodes[2 * node as usize + 1];
+    }
+    let rgb = if f.view == VIEW_HEATMAP { lighting::heat_ramp(count, f.heat_max) } else { lighting::tonemap(sum, f.exposure) };
+    lighting::encode_srgb8(rgb)
+}
+
+/// Forward pass of untextured draws.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn forward_fs(
+    in_normal: Vec3,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(frag_coord)] frag: Vec4,
+    #[spirv(push_constant)] p: &ForwardParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+    out_colour: &mut u32,
+) {
+    demote_unless_winner(frag, p, winners);
+    *out_colour = forward_colour(frag, in_normal, front_facing, Vec3::ONE, p, heads, nodes, lights, materials, counters);
+}
+
+/// Forward pass of textured draws.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn forward_fs_textured(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(frag_coord)] frag: Vec4,
+    #[spirv(push_constant)] p: &ForwardParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+    #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
+    out_colour: &mut u32,
+) {
+    demote_unless_winner(frag, p, winners);
+    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+    *out_colour = forward_colour(frag, in_normal, front_facing, texel, p, heads, nodes, lights, materials, counters);
+}
+
+/// Forward pass of alpha-tested draws (cut-out fragments also fail the EQUAL test; demoted all
+/// the same, as in the pre-pass).
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn forward_fs_masked(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(frag_coord)] frag: Vec4,
+    #[spirv(push_constant)] p: &ForwardParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+    #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
+    #[spirv(descriptor_set = 0, binding = 11)] mask_map: &Texture2d,
+    out_colour: &mut u32,
+) {
+    demote_unless_winner(frag, p, winners);
+    if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
+        spirv_std::arch::demote_to_helper_invocation();
+    }
+    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+    *out_colour = forward_colour(frag, in_normal, front_facing, texel, p, heads, nodes, lights, materials, counters);
+}
