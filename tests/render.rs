@@ -15,7 +15,7 @@ fn assets() -> PathBuf {
 }
 
 fn settings(w: u32, h: u32, technique: Technique) -> Settings {
-    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0, async_compute: true }
+    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0, async_compute: true, sort: Default::default() }
 }
 
 fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {

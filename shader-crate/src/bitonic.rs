@@ -161,13 +161,13 @@ pub fn block_sort<C: Coop>(c: &C, mut x: Lane4) -> Lane4 {
                 x = exchange_lanes(c, x, d / PER_LANE, asc);
             } else {
                 // Slot `j` meets `j ^ d`; direction from element `4·lane + j`.
-                let up = |j: u32| (PER_LANE * lane + j) & size == 0;
+                let e = PER_LANE * lane;
                 if d == 1 {
-                    x = exchange_regs(x, 0, 1, up(0));
-                    x = exchange_regs(x, 2, 3, up(2));
+                    x = exchange_regs(x, 0, 1, e & size == 0);
+                    x = exchange_regs(x, 2, 3, (e + 2) & size == 0);
                 } else {
-                    x = exchange_regs(x, 0, 2, up(0));
-                    x = exchange_regs(x, 1, 3, up(1));
+                    x = exchange_regs(x, 0, 2, e & size == 0);
+                    x = exchange_regs(x, 1, 3, (e + 1) & size == 0);
                 }
             }
             d /= 2;
@@ -332,12 +332,9 @@ pub fn piece_of(lv: &Level, boundaries: &[u32], index: u32) -> Option<Piece> {
     if q >= np {
         return None;
     }
-    let at = |q: u32| {
-        let i = 2 * (pair * ppp + q) as usize;
-        (boundaries[i], boundaries[i + 1])
-    };
-    let (s0, t0) = if ppp == 1 { (0, 0) } else { at(q) };
-    let (s1, t1) = if q + 1 < np { at(q + 1) } else { (a, b) };
+    let first = 2 * (pair * ppp + q) as usize;
+    let (s0, t0) = if ppp == 1 { (0, 0) } else { (boundaries[first], boundaries[first + 1]) };
+    let (s1, t1) = if q + 1 < np { (boundaries[first + 2], boundaries[first + 3]) } else { (a, b) };
     Some(Piece { a0: base + s0, a1: base + s1, b0: base + a + t0, b1: base + a + t1, out0: base + s0 + t0 })
 }
 
@@ -378,6 +375,13 @@ fn load_half<C: Coop>(c: &C, mut x: Lane4, keys: &[u32], values: &[u32], start: 
     x
 }
 
+/// Whether the next chunk comes from A: A's next element `ia` is smaller than B's next `ib`
+/// (or equal: A lies left of B), or B is exhausted.
+#[inline]
+fn take_a(keys: &[u32], p: &Piece, ia: u32, ib: u32) -> bool {
+    ia < p.a1 && (ib >= p.b1 || keys[ia as usize] <= keys[ib as usize])
+}
+
 /// Step 2b: merges one piece with one subgroup (see the module doc). Subgroup-uniform.
 /// Returns the number of merge steps (for tests of the loop bound).
 pub fn merge_piece<C: Coop, O: Store + ?Sized>(c: &C, keys: &[u32], values: &[u32], p: Piece, keys_out: &mut O, values_out: &mut O) -> u32 {
@@ -389,8 +393,7 @@ pub fn merge_piece<C: Coop, O: Store + ?Sized>(c: &C, keys: &[u32], values: &[u3
     let (mut ia, mut ib) = (p.a0, p.b0);
     let mut x = Lane4::pads();
     // Prime the kept half from the run with the smaller head (A at equal keys).
-    let take_a = |ia: u32, ib: u32| ia < p.a1 && (ib >= p.b1 || keys[ia as usize] <= keys[ib as usize]);
-    if take_a(ia, ib) {
+    if take_a(keys, &p, ia, ib) {
         x = load_half(c, x, keys, values, ia, p.a1, false);
         ia += t;
     } else {
@@ -400,7 +403,7 @@ pub fn merge_piece<C: Coop, O: Store + ?Sized>(c: &C, keys: &[u32], values: &[u3
     let mut written = 0;
     let mut steps = 0;
     while written < len {
-        if take_a(ia, ib) {
+        if take_a(keys, &p, ia, ib) {
             x = load_half(c, x, keys, values, ia, p.a1, true);
             ia += t;
         } else {

@@ -85,3 +85,12 @@ pub const AABB_COMPACT: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_
 pub const AABB_ASSIGN: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_assign", 7, [256, 1, 1], true);
 pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_diffuse", 12);
 pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 12);
+
+// Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): block sort and merge give each subgroup
+// a block / piece (cooperative); the splitters are one invocation per sample.
+pub const BITONIC_BLOCK_SORT: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_block_sort", 4, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
+pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_splitters", 2, [crate::bitonic::SPLITTER_WORKGROUP, 1, 1], false);
+pub const BITONIC_MERGE: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_merge", 5, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
