@@ -9,27 +9,27 @@
 //!    the block or the input are *pads*, ordered after every real key by comparing
 //!    `(pad flag, key)`, so a real key `0xFFFF_FFFF` is never mistaken for padding.
 //! 2. **merge levels**, run length `R = run0, 2·run0, …` while `R < n`, ping-ponging buffers:
-//!    a. **splitters** ([`splitter`], only at levels where a pair of runs is larger than one
-//!       piece — "when the runs no longer fill the GPU", Ye §4.2): for each pair of runs (A, B)
-//!       every `g`-th element of A and of B is a sample (strided samples of sorted runs are sorted,
-//!       so a sample's rank in the merged sample list is its own index + a binary-search co-rank
-//!       in the other run's samples); every `k`-th sample by rank is kept. All orders are by
-//!       (key, position), A left of B, so ties split consistently (all-equal input splits
-//!       evenly). A kept A sample `i` bounds a piece at `(i·g, lower_bound(B, key))`, a B sample
-//!       `j` at `(upper_bound(A, key), j·g)`. Pieces are then contiguous segments of the merged
-//!       run: ∀a∈S_i, b∈S_j, i<j ⇒ a ≤ b, and each holds at most `(k+2)·g − 2` elements, with or
-//!       without duplicates (the composite order is strict: k sample gaps + 2 partial ones).
-//!    b. **warp merge** ([`merge_piece`], one subgroup per piece, Ye §3.2): a register buffer of
-//!       M elements in column layout (element `e = j·W + lane`); its lower half (`t = M/2`) is
-//!       kept, its upper half is refilled with the next `t` elements, *reversed*, from the run
-//!       whose next unread element is smaller, which makes the buffer bitonic; half-cleaners
-//!       `d = M/2 … 1` sort it (`d ≥ W` in registers, `d < W` by shuffles), the lower half is
-//!       written out, the upper half becomes the kept half (a register move). A first load primes
-//!       the kept half. Why the refill rule is right: say X's next element `x` is ≤ Y's next
-//!       `y`. Every kept element was read from a prefix of X (so it is ≤ `x` ≤ `y`) or of Y (so it
-//!       is ≤ `y`): the `t` kept elements are all ≤ `y`, so none of Y's unread elements is among
-//!       the `t` smallest of (kept ∪ unread), and X's unread ones among them are within the `t`
-//!       just read. The lower half written is therefore the next `t` of the merged output.
+//!    - a. **splitters** ([`splitter`], only at levels where a pair of runs is larger than one
+//!      piece — "when the runs no longer fill the GPU", Ye §4.2): for each pair of runs (A, B)
+//!      every `g`-th element of A and of B is a sample (strided samples of sorted runs are sorted,
+//!      so a sample's rank in the merged sample list is its own index + a binary-search co-rank
+//!      in the other run's samples); every `k`-th sample by rank is kept. All orders are by
+//!      (key, position), A left of B, so ties split consistently (all-equal input splits
+//!      evenly). A kept A sample `i` bounds a piece at `(i·g, lower_bound(B, key))`, a B sample
+//!      `j` at `(upper_bound(A, key), j·g)`. Pieces are then contiguous segments of the merged
+//!      run: ∀a∈S_i, b∈S_j, i<j ⇒ a ≤ b, and each holds at most `(k+2)·g − 2` elements, with or
+//!      without duplicates (the composite order is strict: k sample gaps + 2 partial ones).
+//!    - b. **warp merge** ([`merge_piece`], one subgroup per piece, Ye §3.2): a register buffer of
+//!      M elements in column layout (element `e = j·W + lane`); its lower half (`t = M/2`) is
+//!      kept, its upper half is refilled with the next `t` elements, *reversed*, from the run
+//!      whose next unread element is smaller, which makes the buffer bitonic; half-cleaners
+//!      `d = M/2 … 1` sort it (`d ≥ W` in registers, `d < W` by shuffles), the lower half is
+//!      written out, the upper half becomes the kept half (a register move). A first load primes
+//!      the kept half. Why the refill rule is right: say X's next element `x` is ≤ Y's next
+//!      `y`. Every kept element was read from a prefix of X (so it is ≤ `x` ≤ `y`) or of Y (so it
+//!      is ≤ `y`): the `t` kept elements are all ≤ `y`, so none of Y's unread elements is among
+//!      the `t` smallest of (kept ∪ unread), and X's unread ones among them are within the `t`
+//!      just read. The lower half written is therefore the next `t` of the merged output.
 //!
 //! Parameters: `g` = [`sample_stride`] = `2·W_min` (one merge step of the narrowest subgroup the
 //! device may pick), `k` = [`SPLITTER_KEEP`] = 8 → a piece is at most 10 merge steps, so one
@@ -297,11 +297,13 @@ pub fn splitter(keys: &[u32], lv: &Level, slot: u32) -> Boundary {
     // A before B at equal keys: an A sample counts the B samples strictly below it, a B sample
     // the A samples at or below it.
     let rank = i + rank_in(keys, other, other_len.div_ceil(g), g, key, !from_a);
-    if rank % lv.keep != 0 {
+    // Kept: ranks 0, k, 2k, … (rank 0 is the pair's first element: boundary (0, 0)).
+    let (kept, after_kept) = (rank / lv.keep, rank % lv.keep);
+    if after_kept != 0 {
         return none;
     }
     let co = rank_in(keys, other, other_len, 1, key, !from_a);
-    let piece = pair * lv.pieces_per_pair() + rank / lv.keep;
+    let piece = pair * lv.pieces_per_pair() + kept;
     if from_a {
         Boundary { piece, a: i * g, b: co }
     } else {

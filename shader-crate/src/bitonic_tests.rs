@@ -142,7 +142,7 @@ fn acceptance_at(width: u32) {
         _ => 8,
     };
     let mut lengths: Vec<u32> = vec![0, 1, 2, 3, 127, 128, 129];
-    lengths.extend((m..=2 * m + 1).filter(|n| (n - m) % block_stride == 0 || *n >= 2 * m));
+    lengths.extend((m..=2 * m + 1).filter(|n| (n - m).is_multiple_of(block_stride) || *n >= 2 * m));
     lengths.extend([piece - 1, piece, piece + 1, 2 * piece + 1, 4 * piece + 3]);
     let mut max_steps = 0;
     for n in lengths {

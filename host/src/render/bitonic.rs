@@ -66,7 +66,7 @@ impl BitonicSort {
         let levels = levels(n, self.min_width);
         let run0 = block_elems(self.min_width);
         // An even number of levels ends where the block sort wrote: in place, then.
-        let in_place = levels.len() % 2 == 0;
+        let in_place = levels.len().is_multiple_of(2);
         let first = Level { n, run: run0, stride: 0, keep: 0 };
         let buffers = [keys, values, &self.keys_tmp, &self.values_tmp];
         rec.dispatch_subgroups(&k.bitonic_block_sort, &buffers, &params(&first, in_place), n.div_ceil(run0))?;
