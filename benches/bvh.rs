@@ -49,6 +49,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         read_back,
         bvh_branching: 0,
         async_compute: false,
+        sort: Default::default(),
     }
 }
 

@@ -4,6 +4,7 @@
 //! holds every light touching it, and the hard cases stay finite and equal.
 mod common;
 use host::gpu::Gpu;
+use host::render::sort::SortKind;
 use host::render::{self, reference, Frame, Settings, Technique};
 use host::render_cmd::{flatten, scene_input};
 use host::scene::{lights, Scene};
@@ -15,7 +16,7 @@ fn assets() -> PathBuf {
 }
 
 fn settings(w: u32, h: u32, technique: Technique) -> Settings {
-    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0, async_compute: true }
+    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0, async_compute: true, sort: Default::default() }
 }
 
 fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
@@ -24,18 +25,24 @@ fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame
 }
 
 /// Renders with the reference and both clustered techniques (naive, and BVH at branchings 32 and
-/// 64) and checks
+/// 64 with the radix light sort, 32 with the bitonic one) and checks
 /// everything the pipeline issues ask for; returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
     let mut frames = Vec::new();
-    for (technique, branching) in [(Technique::ClusteredNaive, 0), (Technique::ClusteredBvh, 32), (Technique::ClusteredBvh, 64)] {
-        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, ..settings(w, h, technique) });
+    let runs = [
+        (Technique::ClusteredNaive, 0, SortKind::Radix),
+        (Technique::ClusteredBvh, 32, SortKind::Radix),
+        (Technique::ClusteredBvh, 64, SortKind::Radix),
+        (Technique::ClusteredBvh, 32, SortKind::Bitonic),
+    ];
+    for (technique, branching, sort) in runs {
+        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, ..settings(w, h, technique) });
         let worst = reference.pixels.iter().zip(&clustered.pixels).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0);
-        assert!(worst <= 1, "{what}, {technique:?} (branching {branching}): differs from deferred by {worst}/255");
+        assert!(worst <= 1, "{what}, {technique:?} (branching {branching}, {sort:?} sort): differs from deferred by {worst}/255");
         reference::check(clustered.readback.as_ref().unwrap())
-            .unwrap_or_else(|e| panic!("{what}, {technique:?} (branching {branching}): {e:#}"));
+            .unwrap_or_else(|e| panic!("{what}, {technique:?} (branching {branching}, {sort:?} sort): {e:#}"));
         frames.push(clustered);
     }
     common::assert_clean(gpu);

@@ -19,7 +19,7 @@ fn assets() -> PathBuf {
 }
 
 fn settings(w: u32, h: u32, technique: Technique, tile_size: u32) -> Settings {
-    Settings { bvh_branching: 0, async_compute: true, width: w, height: h, tile_size, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: false }
+    Settings { bvh_branching: 0, async_compute: true, sort: Default::default(), width: w, height: h, tile_size, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: false }
 }
 
 fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {

@@ -68,6 +68,9 @@ pub struct RenderArgs {
     /// G-buffer raster on the async-compute queue (devices without one always do).
     #[arg(long)]
     pub no_async_compute: bool,
+    /// GPU sort of the lights' Morton keys for `clustered-bvh`.
+    #[arg(long, value_enum, default_value_t = crate::render::sort::SortKind::Radix)]
+    pub sort: crate::render::sort::SortKind,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -222,6 +225,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         read_back: a.stats.is_some(),
         bvh_branching: a.bvh_branching.unwrap_or(0),
         async_compute: !a.no_async_compute,
+        sort: a.sort,
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

@@ -4,7 +4,7 @@
 //! mismatch fails them).
 use crate::coop::gpu::GpuCoop;
 use crate::layout::*;
-use crate::{debug_view, octahedral, radix, scan};
+use crate::{bitonic, debug_view, octahedral, radix, scan};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
@@ -169,5 +169,108 @@ pub fn radix_scatter(
         let dst = (starts[(d * p.groups + g) as usize] + rank) as usize;
         keys_out[dst] = key;
         values_out[dst] = values[i as usize];
+    }
+}
+
+/// Bitonic sort step 1 ([`crate::bitonic`]): subgroup `s` (global) sorts elements
+/// `[s·run, (s+1)·run)` in registers; writes in place or to the scratch pair (`p.in_place`).
+/// Each lane writes exactly the slots it read, so in place is race-free.
+#[spirv(compute(threads(128)))]
+#[allow(clippy::too_many_arguments)]
+pub fn bitonic_block_sort(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &BitonicParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] keys_out: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] values_out: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let block = (wg.y * nwg.x + wg.x) * num_subgroups + subgroup_id;
+    let base = block * p.run;
+    if base >= p.count {
+        return;
+    }
+    let mut x = bitonic::Lane4::pads();
+    let mut j = 0;
+    while j < bitonic::PER_LANE {
+        let e = bitonic::PER_LANE * lane + j;
+        if e < p.run && base + e < p.count {
+            x.k[j as usize] = keys[(base + e) as usize];
+            x.v[j as usize] = values[(base + e) as usize];
+            x.pad &= !(1 << j);
+        }
+        j += 1;
+    }
+    x = bitonic::block_sort(&c, x);
+    let mut j = 0;
+    while j < bitonic::PER_LANE {
+        let e = bitonic::PER_LANE * lane + j;
+        if e < p.run && base + e < p.count {
+            let i = (base + e) as usize;
+            if p.in_place != 0 {
+                keys[i] = x.k[j as usize];
+                values[i] = x.v[j as usize];
+            } else {
+                keys_out[i] = x.k[j as usize];
+                values_out[i] = x.v[j as usize];
+            }
+        }
+        j += 1;
+    }
+}
+
+/// Bitonic sort step 2a: one invocation per sample slot of the level; kept splitters write
+/// their piece's boundary `(a, b)`.
+#[spirv(compute(threads(256)))]
+pub fn bitonic_splitters(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(push_constant)] p: &BitonicParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] boundaries: &mut [u32],
+) {
+    let slot = (wg.y * nwg.x + wg.x) * bitonic::SPLITTER_WORKGROUP + local_index;
+    let lv = bitonic::Level { n: p.count, run: p.run, stride: p.stride, keep: p.keep };
+    if slot >= lv.slots() {
+        return;
+    }
+    let s = bitonic::splitter(keys, &lv, slot);
+    if s.piece != bitonic::NO_PIECE {
+        boundaries[(2 * s.piece) as usize] = s.a;
+        boundaries[(2 * s.piece + 1) as usize] = s.b;
+    }
+}
+
+/// Bitonic sort step 2b: subgroup `s` (global) merges piece `s` of the level.
+#[spirv(compute(threads(128)))]
+#[allow(clippy::too_many_arguments)]
+pub fn bitonic_merge(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &BitonicParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] boundaries: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys_out: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] values_out: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let index = (wg.y * nwg.x + wg.x) * num_subgroups + subgroup_id;
+    let lv = bitonic::Level { n: p.count, run: p.run, stride: p.stride, keep: p.keep };
+    if let Some(piece) = bitonic::piece_of(&lv, boundaries, index) {
+        bitonic::merge_piece(&c, keys, values, piece, keys_out, values_out);
     }
 }

@@ -88,3 +88,12 @@ pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::sha
 
 // Forward+ (`forward_plus.rs`): tiled culling into per-tile linked lists.
 pub const FORWARD_PLUS_CULL: Kernel<TiledParams> = Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tiled::TILED_WORKGROUP, 1, 1], true);
+
+// Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): block sort and merge give each subgroup
+// a block / piece (cooperative); the splitters are one invocation per sample.
+pub const BITONIC_BLOCK_SORT: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_block_sort", 4, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
+pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_splitters", 2, [crate::bitonic::SPLITTER_WORKGROUP, 1, 1], false);
+pub const BITONIC_MERGE: Kernel<BitonicParams> =
+    Kernel::new("entries::bitonic_merge", 5, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);

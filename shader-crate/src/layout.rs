@@ -339,3 +339,23 @@ pub struct ForwardParams {
 }
 const _: () = assert!(core::mem::size_of::<ForwardParams>() == 128);
 const _: () = assert!(core::mem::size_of::<ForwardParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// Bitonic-warp merge sort kernels (`bitonic_block_sort`, `bitonic_splitters`, `bitonic_merge`;
+/// see [`crate::bitonic`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct BitonicParams {
+    /// Elements to sort.
+    pub count: u32,
+    /// Block sort: elements per block (`≤ 4·W`); splitters / merge: run length of the level.
+    pub run: u32,
+    /// Sample stride `g` of the splitters.
+    pub stride: u32,
+    /// Every `keep`-th sample bounds a piece.
+    pub keep: u32,
+    /// Block sort: 1 writes back to bindings 0/1 (in place), 0 writes to bindings 2/3.
+    pub in_place: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<BitonicParams>() == 32);

@@ -13,6 +13,7 @@
 //! * [`coop`] — the cooperative-kernel traits (GPU intrinsics / CPU lock-step emulation).
 //! * [`scan`] — subgroup/workgroup prefix sums.
 //! * [`radix`] — LSD radix sort (key–value) tile steps.
+//! * [`bitonic`] — bitonic-warp merge sort (key–value): block sort, splitters, warp merge.
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 #![cfg_attr(target_arch = "spirv", no_std)]
@@ -37,6 +38,7 @@ macro_rules! unroll8 {
     }};
 }
 
+pub mod bitonic;
 pub mod cluster_bounds;
 pub mod cluster_key;
 pub mod cluster_test;

@@ -100,6 +100,7 @@ fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: u32)
         read_back: true,
         bvh_branching: 0,
         async_compute: true,
+        sort: Default::default(),
     }
 }
 

@@ -1,8 +1,8 @@
 //! The light BVH of `clustered-bvh` (`shaders::light_bvh`): Morton keys of the view-space lights
-//! → GPU radix sort (key = 30-bit Morton code, value = light index) → node boxes built level by
+//! → GPU sort, radix or bitonic (key = 30-bit Morton code, value = light index) → node boxes built level by
 //! level, bottom-up, with `branching` (32 or 64) children per node. Memory: 4 B keys + 4 B order
 //! per light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
-use super::sort::RadixSort;
+use super::sort::{LightSorter, SortKind};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use shaders::layout::{BvhParams, MortonParams, PointLight};
@@ -16,7 +16,7 @@ pub struct LightBvh {
     keys: Buffer,
     pub order: Buffer,
     pub nodes: Buffer,
-    sort: RadixSort,
+    sort: LightSorter,
     quantizers: MortonParams,
 }
 
@@ -28,8 +28,8 @@ impl LightBvh {
     }
 
     /// Buffers for `lights` (view space: the quantiser spans their positions) and a tree of
-    /// `branching` (32 or 64) children per node.
-    pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32) -> VkResult<Self> {
+    /// `branching` (32 or 64) children per node, lights ordered by the `sort` kind of sort.
+    pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32, sort: SortKind) -> VkResult<Self> {
         assert!(valid_branching(branching), "BVH branching {branching}: 32 or 64 (checked by the caller)");
         let n = lights.len() as u32;
         let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
@@ -50,7 +50,7 @@ impl LightBvh {
             keys: Buffer::storage(ctx, "light Morton keys", 4 * n as u64)?,
             order: Buffer::storage(ctx, "light order", 4 * n as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
-            sort: RadixSort::new(gpu, n.max(1))?,
+            sort: LightSorter::new(gpu, sort, n.max(1))?,
             quantizers: MortonParams {
                 q30: MortonQuantizer::new(lo, hi, MORTON30_BITS),
                 q63: MortonQuantizer::new(lo, hi, MORTON63_BITS),

@@ -15,6 +15,7 @@
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
 //! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
+pub mod bitonic;
 pub mod bvh;
 pub mod clustered_aabb;
 pub mod forward_plus;
@@ -98,6 +99,8 @@ pub struct Settings {
     pub bvh_branching: u32,
     /// Run the light sort + BVH build on the async-compute queue when the device has one.
     pub async_compute: bool,
+    /// GPU sort of the lights' Morton keys (`clustered-bvh`).
+    pub sort: sort::SortKind,
 }
 
 /// GPU results kept for checks and statistics.
@@ -258,7 +261,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
                         b if shaders::light_bvh::valid_branching(b) => b,
                         b => bail!("BVH branching {b}: 32 or 64"),
                     };
-                    Some(bvh::LightBvh::new(gpu, &lights_view, b).context("allocating the light BVH")?)
+                    Some(bvh::LightBvh::new(gpu, &lights_view, b, s.sort).context("allocating the light BVH")?)
                 }
                 _ => None,
             };

@@ -56,3 +56,36 @@ impl RadixSort {
         Ok(())
     }
 }
+
+/// Which GPU sort orders the lights' Morton keys (`render --sort`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SortKind {
+    /// LSD radix sort ([`RadixSort`]), stable.
+    #[default]
+    Radix,
+    /// Bitonic-warp merge sort ([`super::bitonic::BitonicSort`]).
+    Bitonic,
+}
+
+/// The light sort of `clustered-bvh`: one of the two GPU key–value sorts, same interface.
+pub enum LightSorter {
+    Radix(RadixSort),
+    Bitonic(super::bitonic::BitonicSort),
+}
+
+impl LightSorter {
+    pub fn new(gpu: &Gpu, kind: SortKind, capacity: u32) -> VkResult<Self> {
+        Ok(match kind {
+            SortKind::Radix => Self::Radix(RadixSort::new(gpu, capacity)?),
+            SortKind::Bitonic => Self::Bitonic(super::bitonic::BitonicSort::new(gpu, capacity)?),
+        })
+    }
+
+    /// Records a sort of `keys[..n]` (values follow) for keys below `2^key_bits`.
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, keys: &Buffer, values: &Buffer, n: u32, key_bits: u32) -> VkResult<()> {
+        match self {
+            Self::Radix(s) => s.record(gpu, rec, keys, values, n, key_bits),
+            Self::Bitonic(s) => s.record(gpu, rec, keys, values, n, key_bits),
+        }
+    }
+}

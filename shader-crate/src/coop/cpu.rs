@@ -2,8 +2,11 @@
 //!
 //! Every invocation of a workgroup is an OS thread running the kernel closure. Collective
 //! operations synchronise in lock-step: a subgroup shuffle is "write my value to my lane slot —
-//! subgroup barrier — read the source slot — subgroup barrier", a ballot likewise with one bit per
-//! lane, and `workgroup_barrier` is a barrier over all invocations. Workgroup memory is a shared
+//! subgroup barrier — read the source slot", a ballot likewise with one bit per lane, and
+//! `workgroup_barrier` is a barrier over all invocations. Consecutive subgroup operations use
+//! alternate banks of slots, so one barrier per operation suffices: operation `i + 2` writes the
+//! bank of operation `i` only after the barrier of operation `i + 1`, which every lane reaches
+//! after its read of operation `i`. Workgroup memory is a shared
 //! array of relaxed atomics; the barriers (mutex + condvar) order the accesses, exactly as the
 //! GPU's acquire/release barrier does, so a missing barrier shows up as a data race the tests can
 //! observe. Invocation `l` belongs to subgroup `l / width`, lane `l % width` — one of the mappings
@@ -90,6 +93,7 @@ impl PoisonBarrier {
 
 struct SubgroupState {
     barrier: PoisonBarrier,
+    /// Two banks of `width` slots / votes (alternate subgroup operations).
     slots: Vec<AtomicU32>,
     votes: Vec<AtomicBool>,
 }
@@ -103,6 +107,17 @@ pub struct CpuCoop<'a> {
     local_index: u32,
     subgroup: &'a SubgroupState,
     workgroup: &'a PoisonBarrier,
+    /// Subgroup operations so far (their parity picks the bank).
+    ops: std::cell::Cell<u32>,
+}
+
+impl CpuCoop<'_> {
+    /// First slot of the bank of the next subgroup operation.
+    fn bank(&self) -> usize {
+        let n = self.ops.get();
+        self.ops.set(n.wrapping_add(1));
+        (n & 1) as usize * self.width as usize
+    }
 }
 
 impl Coop for CpuCoop<'_> {
@@ -123,25 +138,24 @@ impl Coop for CpuCoop<'_> {
     }
     fn shuffle(&self, v: u32, src: u32) -> u32 {
         assert!(src < self.width, "shuffle source lane {src} >= subgroup width {}", self.width);
-        self.subgroup.slots[self.lane as usize].store(v, Ordering::Relaxed);
+        let bank = self.bank();
+        self.subgroup.slots[bank + self.lane as usize].store(v, Ordering::Relaxed);
         self.subgroup.barrier.wait();
-        let r = self.subgroup.slots[src as usize].load(Ordering::Relaxed);
-        self.subgroup.barrier.wait();
-        r
+        self.subgroup.slots[bank + src as usize].load(Ordering::Relaxed)
     }
     fn shuffle_xor(&self, v: u32, mask: u32) -> u32 {
         self.shuffle(v, (self.lane ^ mask) % self.width)
     }
     fn ballot(&self, pred: bool) -> [u32; 4] {
-        self.subgroup.votes[self.lane as usize].store(pred, Ordering::Relaxed);
+        let bank = self.bank();
+        self.subgroup.votes[bank + self.lane as usize].store(pred, Ordering::Relaxed);
         self.subgroup.barrier.wait();
         let mut m = [0u32; 4];
-        for (l, vote) in self.subgroup.votes.iter().enumerate() {
+        for (l, vote) in self.subgroup.votes[bank..bank + self.width as usize].iter().enumerate() {
             if vote.load(Ordering::Relaxed) {
                 m[l / 32] |= 1 << (l % 32);
             }
         }
-        self.subgroup.barrier.wait();
         m
     }
     fn workgroup_barrier(&self) {
@@ -197,8 +211,8 @@ where
         let subgroups: Vec<SubgroupState> = (0..num_subgroups)
             .map(|_| SubgroupState {
                 barrier: PoisonBarrier::new(width, "subgroup"),
-                slots: (0..width).map(|_| AtomicU32::new(0)).collect(),
-                votes: (0..width).map(|_| AtomicBool::new(false)).collect(),
+                slots: (0..2 * width).map(|_| AtomicU32::new(0)).collect(),
+                votes: (0..2 * width).map(|_| AtomicBool::new(false)).collect(),
             })
             .collect();
         let wg_barrier = PoisonBarrier::new(workgroup_size, "workgroup");
@@ -218,6 +232,7 @@ where
                                 local_index,
                                 subgroup: sg,
                                 workgroup: wg_barrier,
+                                ops: std::cell::Cell::new(0),
                             };
                             let mut mem = CpuShared { words: shared };
                             let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
