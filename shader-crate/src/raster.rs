@@ -109,7 +109,27 @@ pub fn write_targets(in_normal: Vec3, front_facing: bool, texel: Vec3, draw: &Dr
     // Two-sided surfaces: the normal faces the side being seen.
     let n = if front_facing { in_normal } else { -in_normal };
     *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
-    *out_albedo = (Vec3::from_array(draw.albedo) * texel).extend(draw.material as f32 / 255.0);
+    // Quantised here, exactly (round to nearest): the UNORM8 target then stores `k/255`, which
+    // every rounding mode Vulkan allows converts back to `k`, so Forward+ (which computes the same
+    // `unorm8`) sees the albedo the deferred passes read, on any driver.
+    let a = Vec3::from_array(draw.albedo) * texel;
+    *out_albedo = Vec4::new(unorm8(a.x), unorm8(a.y), unorm8(a.z), draw.material as f32 / 255.0);
+}
+
+/// A channel as the `UNORM8` G-buffer stores and the shading passes decode it: clamped to
+/// [0, 1], rounded to the nearest `k/255`.
+#[inline]
+pub fn unorm8(x: f32) -> f32 {
+    let c = if x > 0.0 {
+        if x < 1.0 {
+            x
+        } else {
+            1.0
+        }
+    } else {
+        0.0
+    };
+    ((c * 255.0 + 0.5) as u32) as f32 * (1.0 / 255.0)
 }
 
 /// The vertex shader of textured draws: as [`gbuffer_vs`] plus the texture coordinate.

@@ -11,7 +11,7 @@
 //! deferred reference, not just a similar forward rendering.
 use crate::layout::*;
 use crate::octahedral::{self, Precision};
-use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, Texture2d, ALPHA_CUTOFF};
+use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
 use crate::{lighting, reconstruct};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
@@ -73,21 +73,6 @@ fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
     if winners[(py * p.frame.grid.width + px) as usize] != p.frame.count {
         spirv_std::arch::demote_to_helper_invocation();
     }
-}
-
-/// A channel as the `UNORM8` G-buffer stores and the shading pass decodes it.
-#[inline]
-fn unorm8(x: f32) -> f32 {
-    let c = if x > 0.0 {
-        if x < 1.0 {
-            x
-        } else {
-            1.0
-        }
-    } else {
-        0.0
-    };
-    ((c * 255.0 + 0.5) as u32) as f32 * (1.0 / 255.0)
 }
 
 /// The forward shading of one fragment (module docs): the sum over its tile's list. Views: the

@@ -17,7 +17,7 @@
 //!
 //! The "frame" stage is the sum of the main queue's passes (async-compute passes that overlap
 //! the raster are not added: [`crate::render::ASYNC_PASSES`]); "compute" is the frame without
-//! its raster passes ([`RASTER_PASSES`]), because a GPU may give raster work only part of the
+//! its raster passes ([`is_raster_pass`]), because a GPU may give raster work only part of the
 //! chip (the H100 runs it on 2 of its TPCs) — both are reported.
 pub mod accuracy;
 pub mod plots;
@@ -33,8 +33,11 @@ use shaders::layout::{PRECISION_OCT16, VIEW_SHADED};
 use std::io::Write as _;
 use std::path::PathBuf;
 
-/// Passes that run on the raster pipeline.
-pub const RASTER_PASSES: [&str; 1] = ["gbuffer"];
+/// Passes that run on the raster pipeline: the G-buffer of the deferred techniques, and the depth
+/// pre-pass and forward shading pass of `forward-plus`.
+pub fn is_raster_pass(t: Technique, stage: &str) -> bool {
+    stage == "gbuffer" || (t == Technique::ForwardPlus && (stage == "depth pre-pass" || stage == "shading"))
+}
 
 /// Columns of `results.csv`.
 pub const CSV_COLUMNS: [&str; 14] = [
@@ -200,7 +203,7 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
     let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
     let on_main = |p: &&Row| !(frame.overlapped && render::ASYNC_PASSES.contains(&p.stage.as_str()));
     let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
-        rows.iter().filter(on_main).filter(|p| raster || !RASTER_PASSES.contains(&p.stage.as_str())).map(f).sum()
+        rows.iter().filter(on_main).filter(|p| raster || !is_raster_pass(t, &p.stage)).map(f).sum()
     };
     // Sums of medians (the per-frame sums were not kept): min and max sum the passes' extremes.
     let frame_row = row("frame", sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
@@ -222,6 +225,18 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut out = Results { device: gpu.ctx.info.line(), command, ..Default::default() };
+    // Warm-up: a GPU idle before the sweep starts at low clocks, which one warm-up frame per
+    // configuration does not undo for the first ones. Render the first configuration for 2 s, unrecorded.
+    if let (Some(name), Some(&n), Some(&t)) = (a.scenes.first(), a.lights.first(), techniques.first()) {
+        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        let warm = BenchArgs { frames: a.frames.max(10), ..a.clone() };
+        let start = std::time::Instant::now();
+        while skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver).is_none() && start.elapsed().as_secs_f64() < 2.0 {
+            if run_config(gpu, &scene, name, t, n, &warm).is_err() {
+                break; // the sweep records the error where it belongs
+            }
+        }
+    }
     for name in &a.scenes {
         let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
         for &n in &a.lights {

@@ -26,7 +26,7 @@ pub fn markdown(r: &Results, plots: &[PathBuf]) -> String {
         md,
         "GPU times are medians of the timed frames from per-pass timestamps. *frame* = the sum of the passes \
          on the main queue (async-compute passes that overlap the raster are not added); *compute* = the frame \
-         without its raster passes (G-buffer), reported apart because a GPU may run raster work on part of the chip only.\n"
+         without its raster passes (G-buffer; forward-plus: depth pre-pass and forward shading), reported apart because a GPU may run raster work on part of the chip only.\n"
     );
     let mut scenes: Vec<&str> = Vec::new();
     for row in &r.rows {
