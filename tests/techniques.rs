@@ -7,7 +7,7 @@ mod common;
 use host::gpu::Gpu;
 use host::render::{self, Frame, Settings, Technique};
 use host::render_cmd::{flatten, scene_input};
-use host::scene::{lights, Camera, Scene};
+use host::scene::{lights, view_camera, Scene};
 use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
 use std::path::PathBuf;
 
@@ -86,21 +86,6 @@ fn sponza_1k_and_10k_lights_equal_the_reference() {
     }
 }
 
-/// A camera in the avenue a metre from a building, looking past its corner: the wall at 1–5 m
-/// fills the right of the frame, the cross street and the avenue behind it reach hundreds of
-/// metres, so tiles on the corner span two orders of magnitude in depth (the case where 2.5D
-/// culling helps, and where a tile's depth bounds must not lose the near or the far pixels).
-fn city_corner_camera() -> Camera {
-    Camera {
-        position: glam::Vec3::new(3.2, 1.6, 8.0),
-        target: glam::Vec3::new(6.0, 1.8, -20.0),
-        up: glam::Vec3::Y,
-        fov_y_degrees: 60.0,
-        near: 0.1,
-        far: 1000.0,
-    }
-}
-
 /// The widest ratio of far to near depth within one 16 px tile of a frame's depth buffer.
 fn widest_tile_depth_ratio(depth: &[u32], w: u32, h: u32) -> f32 {
     let mut widest = 0.0f32;
@@ -131,7 +116,7 @@ fn assert_discontinuity_view(gpu: &Gpu, scene: &Scene, l: &[PointLight], what: &
 fn depth_discontinuity_views_equal_the_reference() {
     let gpu = common::gpu();
     let mut scene = city();
-    scene.camera = city_corner_camera();
+    scene.camera = view_camera("city", "corner").unwrap();
     // Lights along the avenue and around the corner, plus uniform ones.
     let mut l = lights::uniform(&scene, 3_000, 21).unwrap();
     l.extend((0..200).map(|i| PointLight {
@@ -142,22 +127,9 @@ fn depth_discontinuity_views_equal_the_reference() {
     }));
     assert_discontinuity_view(&gpu, &scene, &l, "city corner");
     let mut sponza = Scene::load("sponza", &assets()).unwrap();
-    sponza.camera = sponza_column_camera();
+    sponza.camera = view_camera("sponza", "column").unwrap();
     let l = lights::uniform(&sponza, 10_000, 23).unwrap();
     assert_discontinuity_view(&gpu, &sponza, &l, "sponza column");
-}
-
-/// Sponza: about 100 units (≈ 0.8 m) east of the ground-floor column near (500, 200), looking
-/// west down the court: the column at the right edge, the far end of the court ~1900 units away.
-fn sponza_column_camera() -> Camera {
-    Camera {
-        position: glam::Vec3::new(590.0, 160.0, 140.0),
-        target: glam::Vec3::new(-1300.0, 260.0, 200.0),
-        up: glam::Vec3::Y,
-        fov_y_degrees: 60.0,
-        near: 5.0,
-        far: 5000.0,
-    }
 }
 
 /// 2000 lights at one point: more than a tile list holds (several rounds) and more references
