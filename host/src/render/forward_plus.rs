@@ -309,6 +309,26 @@ pub fn run(gpu: &Gpu, p: &FrameParams, frames: u32, profiler: &mut Profiler, sce
         }
         f += 1;
     }
+    out.max_list = fp.longest_list(g.tiles_x * g.tiles_y, out.refs)?;
     out.buffers = fp.sizes();
     Ok(out)
+}
+
+impl ForwardPlus {
+    /// The longest tile list of the last frame, walked on the CPU from the read-back heads and
+    /// nodes (node `n` = words `2n` light, `2n + 1` next; at most `refs` steps per list).
+    fn longest_list(&mut self, tiles: u32, refs: u32) -> Result<u32> {
+        let heads: Vec<u32> = self.heads.read(tiles as usize)?;
+        let nodes: Vec<u32> = self.nodes.read(2 * refs as usize)?;
+        let mut longest = 0;
+        for &h in &heads {
+            let (mut n, mut len) = (h, 0u32);
+            while n != shaders::forward_plus::NO_NODE && n < refs && len <= refs {
+                len += 1;
+                n = nodes[2 * n as usize + 1];
+            }
+            longest = longest.max(len);
+        }
+        Ok(longest)
+    }
 }

@@ -250,7 +250,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         Technique::ForwardPlus => {
             let sc = forward_plus::SceneGpu { geometry: &geometry, indices: scene.indices, textures: &textures, camera: &camera, lights: &lights, materials: &materials };
             let o = forward_plus::run(gpu, &params, s.frames, &mut profiler, &sc, &targets, &frame_buf)?;
-            (timings_all, light_refs, regrowths) = (o.timings, o.refs, o.regrowths);
+            (timings_all, light_refs, max_list, regrowths) = (o.timings, o.refs, o.max_list, o.regrowths);
             buffers.extend(o.buffers);
         }
         Technique::ClusteredNaive | Technique::ClusteredBvh => {
