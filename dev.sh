@@ -63,6 +63,14 @@ case "$cmd" in
         shift
         # Every GPU test opens the Khronos validation layer with synchronization validation and
         # fails on any message. Clippy must be clean too. (No doc-test targets: there are none.)
+        # Sponza/bunny tests run when the shared assets are there (../shared/assets by default,
+        # or MANYLIGHTS_ASSETS); then they are required, so a broken path fails instead of skipping.
+        assets="${MANYLIGHTS_ASSETS:-$PWD/../shared/assets}"
+        if [ -d "$assets/sponza" ]; then
+            export MANYLIGHTS_ASSETS="$assets" MANYLIGHTS_REQUIRE_ASSETS=1
+        else
+            echo "note: no Sponza at $assets: the Sponza tests are skipped (set MANYLIGHTS_ASSETS)" >&2
+        fi
         log=$(mktemp)
         set +e
         cargo test --workspace --lib --bins --tests "$@" 2>&1 | tee "$log"
