@@ -16,11 +16,11 @@
 //! limit are skipped there). Quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use host::gpu::Gpu;
-use host::render::{self, Readback, Settings, Technique};
+use host::render::{self, Settings, Technique};
 use host::render_cmd::{flatten, scene_input};
 use host::scene::{lights, Scene};
 use host::vk::ContextOptions;
-use shaders::layout::{FrameParams, PointLight, PRECISION_OCT16, VIEW_SHADED};
+use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -61,21 +61,6 @@ fn distributions(scene: &Scene, n: usize) -> [(&'static str, Vec<PointLight>); 2
     ]
 }
 
-/// Frame parameters the CPU cluster searches need (the grid and the light count).
-fn cpu_params(rb: &Readback) -> FrameParams {
-    FrameParams {
-        grid: rb.grid,
-        count: 0,
-        num_lights: rb.lights_view.len() as u32,
-        light_capacity: 0,
-        effects: 0,
-        normal_precision: 0,
-        view: 0,
-        exposure: 1.0,
-        heat_max: 0,
-    }
-}
-
 fn bvh(c: &mut Criterion) {
     let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device");
     eprintln!("device: {}", gpu.ctx.info.line());
@@ -111,7 +96,7 @@ fn bvh(c: &mut Criterion) {
             // The frame's unique clusters and view-space lights, from one GPU frame.
             let f = render::render(&gpu, &scene_input(&scene, &flat, &l), &settings(Technique::ClusteredNaive, true)).expect("frame");
             let rb = f.readback.expect("read back");
-            let p = cpu_params(&rb);
+            let p = render::reference::cpu_params(&rb);
             let branching = 32;
             g.bench_function(BenchmarkId::new(format!("cpu bvh {dist}"), n), |b| {
                 b.iter_custom(|iters| {

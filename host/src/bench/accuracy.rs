@@ -110,7 +110,7 @@ fn pass(f: &Frame, name: &str) -> f64 {
 
 /// Frame and compute ms as in the sweep (main queue; compute = without raster).
 fn frame_ms(f: &Frame) -> (f64, f64) {
-    let main = f.timings.iter().filter(|t| !(f.overlapped && render::ASYNC_PASSES.contains(&t.name.as_str())));
+    let main = f.timings.iter().filter(|t| f.on_main_queue(&t.name));
     let (mut frame, mut compute) = (0.0, 0.0);
     for t in main {
         frame += t.ms;

@@ -201,7 +201,7 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         lights_per_list_max,
     };
     let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
-    let on_main = |p: &&Row| !(frame.overlapped && render::ASYNC_PASSES.contains(&p.stage.as_str()));
+    let on_main = |p: &&Row| frame.on_main_queue(&p.stage);
     let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
         rows.iter().filter(on_main).filter(|p| raster || !is_raster_pass(t, &p.stage)).map(f).sum()
     };

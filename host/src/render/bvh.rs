@@ -32,16 +32,7 @@ impl LightBvh {
     pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32, sort: SortKind) -> VkResult<Self> {
         assert!(valid_branching(branching), "BVH branching {branching}: 32 or 64 (checked by the caller)");
         let n = lights.len() as u32;
-        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        for l in lights {
-            for a in 0..3 {
-                lo[a] = lo[a].min(l.position[a]);
-                hi[a] = hi[a].max(l.position[a]);
-            }
-        }
-        if lights.is_empty() {
-            (lo, hi) = ([0.0; 3], [1.0; 3]);
-        }
+        let (lo, hi) = position_bounds(lights);
         let nodes = total_nodes(n.max(1), branching);
         let ctx = &gpu.ctx;
         Ok(Self {
@@ -90,12 +81,11 @@ impl LightBvh {
     }
 }
 
-/// The same BVH on the CPU, from the kernels' own functions run one after the other: Morton keys
-/// of `lights` (view space) → `sort_unstable_by_key` → leaf and inner node boxes. Returns the
-/// sorted order and the nodes (the CPU baseline of benches/bvh.rs, and a test oracle).
-pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shaders::layout::ClusterAabb>) {
-    use shaders::light_bvh::{inner_node_box, leaf_node_box, EMPTY_BOX};
-    let n = lights.len() as u32;
+/// Bounds of the lights' positions, which the Morton quantiser spans (the unit box for none).
+fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
+    if lights.is_empty() {
+        return ([0.0; 3], [1.0; 3]);
+    }
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     for l in lights {
         for a in 0..3 {
@@ -103,6 +93,16 @@ pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shader
             hi[a] = hi[a].max(l.position[a]);
         }
     }
+    (lo, hi)
+}
+
+/// The same BVH on the CPU, from the kernels' own functions run one after the other: Morton keys
+/// of `lights` (view space) → `sort_unstable_by_key` → leaf and inner node boxes. Returns the
+/// sorted order and the nodes (the CPU baseline of benches/bvh.rs, and a test oracle).
+pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shaders::layout::ClusterAabb>) {
+    use shaders::light_bvh::{inner_node_box, leaf_node_box, EMPTY_BOX};
+    let n = lights.len() as u32;
+    let (lo, hi) = position_bounds(lights);
     let q = MortonQuantizer::new(lo, hi, MORTON30_BITS);
     let mut keyed: Vec<(u32, u32)> = lights.iter().enumerate().map(|(i, l)| (q.morton30_of(l.position), i as u32)).collect();
     keyed.sort_unstable_by_key(|e| e.0);

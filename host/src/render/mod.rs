@@ -142,6 +142,14 @@ pub struct Frame {
     pub overlapped: bool,
 }
 
+impl Frame {
+    /// Whether pass `name` ran on the main queue (every pass, except the [`ASYNC_PASSES`] of an
+    /// overlapped frame): the main queue's passes, waits included, make up the frame's time.
+    pub fn on_main_queue(&self, name: &str) -> bool {
+        !(self.overlapped && ASYNC_PASSES.contains(&name))
+    }
+}
+
 /// Passes that run on the async-compute queue when the frame is overlapped.
 pub const ASYNC_PASSES: [&str; 3] = ["morton keys", "light sort", "bvh build"];
 

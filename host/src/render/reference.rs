@@ -43,6 +43,22 @@ pub fn list_stats(rb: &Readback) -> ListStats {
     s
 }
 
+/// Frame parameters the CPU cluster searches need: the frame's grid and light count (default
+/// AABB test, no other effect).
+pub fn cpu_params(rb: &Readback) -> shaders::layout::FrameParams {
+    shaders::layout::FrameParams {
+        grid: rb.grid,
+        count: 0,
+        num_lights: rb.lights_view.len() as u32,
+        light_capacity: 0,
+        effects: 0,
+        normal_precision: 0,
+        view: 0,
+        exposure: 1.0,
+        heat_max: 0,
+    }
+}
+
 /// All three checks; an error names the first violations.
 pub fn check(rb: &Readback) -> Result<()> {
     let g = &rb.grid;
@@ -60,17 +76,7 @@ pub fn check(rb: &Readback) -> Result<()> {
         rb.unique.iter().take(4).collect::<Vec<_>>(),
         expected.iter().take(4).collect::<Vec<_>>()
     );
-    let params = shaders::layout::FrameParams {
-        grid: *g,
-        count: 0,
-        num_lights: rb.lights_view.len() as u32,
-        light_capacity: 0,
-        effects: 0,
-        normal_precision: 0,
-        view: 0,
-        exposure: 1.0,
-        heat_max: 0,
-    };
+    let params = cpu_params(rb);
     // Every cluster's list, as a set, equals the CPU's naive search (whatever order the technique
     // produced: index order for naive, Morton order for the BVH).
     let mut bad_lists = Vec::new();

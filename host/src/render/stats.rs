@@ -15,7 +15,7 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
     let passes: serde_json::Map<String, Value> = frame.timings.iter().map(|t| (t.name.clone(), json!(t.ms))).collect();
     // Overlapped async-compute passes run beside the main queue's: the main queue's passes
     // (which include any wait for them) make up the frame.
-    let total: f64 = frame.timings.iter().filter(|t| !(frame.overlapped && super::ASYNC_PASSES.contains(&t.name.as_str()))).map(|t| t.ms).sum();
+    let total: f64 = frame.timings.iter().filter(|t| frame.on_main_queue(&t.name)).map(|t| t.ms).sum();
     let buffers: serde_json::Map<String, Value> = frame.buffers.iter().map(|(n, b)| (n.clone(), json!(b))).collect();
     json!({
         "device": { "name": device.name, "kind": device.kind, "driver": format!("{} {}", device.driver_name, device.driver_info),
