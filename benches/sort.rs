@@ -7,12 +7,13 @@
 //! `host::render::bitonic`), timed with GPU timestamps (`iter_custom`: the keys are re-uploaded
 //! before each run, outside the timed pass); Rust's `sort_unstable_by_key` on the CPU as an
 //! anchor; and the CPU versions of the kernels — the same functions in the lock-step emulation
-//! (`shaders::radix::pass_emulated`, `shaders::bitonic::emulated::sort_emulated`), which measure
-//! the emulation, not a CPU sort.
+//! (`shaders::radix::pass_emulated`, `shaders::bitonic::emulated::sort_emulated`: every
+//! invocation a coroutine, switched at each shuffle, ballot and barrier), which measure the
+//! emulation, not a CPU sort.
 //!
 //! `cargo bench -p host --bench sort`. Environment: `MANYLIGHTS_DEVICE`; GPU sizes
 //! `MANYLIGHTS_SORT_SIZES` (default 1k,10k,100k,1M,16M); emulated sizes
-//! `MANYLIGHTS_SORT_CPU_SIZES` (default 1k,10k; ≈0.5 ms per key for the bitonic emulation) at
+//! `MANYLIGHTS_SORT_CPU_SIZES` (default 1k,10k,100k,1M; a few µs per key) at
 //! subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default 8). lavapipe's timestamps do not bracket
 //! its work: quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -111,7 +112,7 @@ fn emulated_sort(c: &mut Criterion) {
     for (dist, make) in DISTRIBUTIONS {
         let mut g = c.benchmark_group(format!("key-value sort (CPU emulation, width {width})/{dist}"));
         g.sample_size(10).warm_up_time(Duration::from_millis(100)).measurement_time(Duration::from_secs(1));
-        for n in env_sizes("MANYLIGHTS_SORT_CPU_SIZES", &[1_000, 10_000]) {
+        for n in env_sizes("MANYLIGHTS_SORT_CPU_SIZES", &[1_000, 10_000, 100_000, 1_000_000]) {
             let k = make(n);
             let values: Vec<u32> = (0..n as u32).collect();
             g.throughput(Throughput::Elements(n as u64));

@@ -1,34 +1,8 @@
 use super::emulated::*;
 use super::*;
+use crate::sort_acceptance_tests::inputs;
 
 const WIDTHS: [u32; 5] = [4, 8, 16, 32, 64];
-
-fn xorshift(seed: u32) -> impl FnMut() -> u32 {
-    let mut x = seed | 1;
-    move || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        x
-    }
-}
-
-/// The five input shapes of the acceptance matrix (`0xFFFF_FFFF` among the random keys: a real
-/// key equal to the pads' key).
-fn inputs(n: usize, seed: u32) -> Vec<(&'static str, Vec<u32>)> {
-    let mut rnd = xorshift(seed);
-    let mut random: Vec<u32> = (0..n).map(|_| rnd()).collect();
-    if n > 2 {
-        random[n / 2] = u32::MAX;
-    }
-    vec![
-        ("all equal", vec![0xdead_beef; n]),
-        ("sorted", (0..n as u32).map(|i| i.wrapping_mul(3)).collect()),
-        ("reverse", (0..n as u32).rev().collect()),
-        ("few distinct", (0..n).map(|_| rnd() % 4).collect()),
-        ("random", random),
-    ]
-}
 
 /// Sorts `keys` (values = indices) in the emulation and compares with `sort`: keys equal, and
 /// the (key, value) multiset equal.
@@ -125,60 +99,8 @@ fn splitter_pieces_partition_each_pair_within_the_bound() {
     assert!(split_levels > 20, "the cases must reach split levels ({split_levels})");
 }
 
-/// The acceptance matrix on the CPU at one width. Lengths: 0–3 and 127–129; from one block
-/// (M = 4·W) to two blocks + 1 — every length at widths 4–16, every 4th (W = 32) or 8th (W = 64)
-/// plus the ends there, because the lock-step emulation costs a context switch per lane per
-/// shuffle; and around one piece (`P = g·k`, the largest pair merged without splitters) up to
-/// `4·P + 3`, which runs the splitter levels. Every input shape at the boundary lengths (0–3,
-/// 127–129, M, 2M + 1, P + 1), random keys with and without duplicates everywhere.
-/// (2^20 and 2^20 + 17 run on lavapipe in `tests/sort.rs`; on the CPU only in the ignored
-/// `a_million_keys_at_width_4`.)
-fn acceptance_at(width: u32) {
-    let m = PER_LANE * width;
-    let piece = SPLITTER_KEEP * sample_stride(width);
-    let block_stride = match width {
-        ..=16 => 1,
-        32 => 4,
-        _ => 8,
-    };
-    let mut lengths: Vec<u32> = vec![0, 1, 2, 3, 127, 128, 129];
-    lengths.extend((m..=2 * m + 1).filter(|n| (n - m).is_multiple_of(block_stride) || *n >= 2 * m));
-    lengths.extend([piece - 1, piece, piece + 1, 2 * piece + 1, 4 * piece + 3]);
-    let mut max_steps = 0;
-    for n in lengths {
-        let boundary = n <= 3 || (127..=129).contains(&n) || n == m || n == 2 * m + 1 || n == piece + 1;
-        for (what, keys) in inputs(n as usize, n ^ width) {
-            let shapes = if width >= 32 && n > 2 * m + 1 { ["random", "random"] } else { ["random", "few distinct"] };
-            if !boundary && !shapes.contains(&what) {
-                continue;
-            }
-            max_steps = max_steps.max(check(width, width, &keys, what));
-        }
-    }
-    // One merge step takes t = 2·W = g elements; a piece holds at most (k+2)·g − 2.
-    assert!(max_steps <= SPLITTER_KEEP + 2, "width {width}: {max_steps} merge steps in one subgroup");
-}
-
-#[test]
-fn emulated_sort_equals_sort_width_4() {
-    acceptance_at(4);
-}
-#[test]
-fn emulated_sort_equals_sort_width_8() {
-    acceptance_at(8);
-}
-#[test]
-fn emulated_sort_equals_sort_width_16() {
-    acceptance_at(16);
-}
-#[test]
-fn emulated_sort_equals_sort_width_32() {
-    acceptance_at(32);
-}
-#[test]
-fn emulated_sort_equals_sort_width_64() {
-    acceptance_at(64);
-}
+// The acceptance matrix (lengths × shapes × widths 4–64, 2^20 included) is
+// `crate::sort_acceptance_tests`, shared with the radix sort.
 
 /// A driver may run a kernel with a wider subgroup than the plan's narrowest one: same result.
 #[test]
@@ -194,17 +116,3 @@ fn wider_subgroup_than_planned_sorts_too() {
         }
     }
 }
-
-/// 2^20 and 2^20 + 17 keys, all five shapes, at width 4. The lock-step emulation costs a context
-/// switch per lane per shuffle (≈0.5 ms per key per sort on 2 cores), so this runs only on
-/// request; lavapipe runs the same lengths and shapes at width 8 in `tests/sort.rs`.
-#[test]
-#[ignore = "about 80 minutes on 2 cores (≈0.5 ms per key per sort): cargo test -p shaders a_million -- --ignored"]
-fn a_million_keys_at_width_4() {
-    for n in [1 << 20, (1 << 20) + 17] {
-        for (what, keys) in inputs(n, 7) {
-            check(4, 4, &keys, what);
-        }
-    }
-}
-

@@ -67,6 +67,8 @@ pub mod raster;
 pub mod raster_forward;
 pub mod reconstruct;
 pub mod scan;
+#[cfg(test)]
+mod sort_acceptance_tests;
 #[cfg(feature = "compute")]
 pub mod tiled;
 

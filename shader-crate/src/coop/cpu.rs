@@ -1,123 +1,75 @@
-//! CPU emulation of a workgroup for [`Coop`] kernels (tests, benchmarks and CPU baselines).
+//! CPU emulation of workgroups for [`Coop`] kernels (tests, benchmarks and CPU baselines).
 //!
-//! Every invocation of a workgroup is an OS thread running the kernel closure. Collective
-//! operations synchronise in lock-step: a subgroup shuffle is "write my value to my lane slot —
-//! subgroup barrier — read the source slot", a ballot likewise with one bit per lane, and
-//! `workgroup_barrier` is a barrier over all invocations. Consecutive subgroup operations use
-//! alternate banks of slots, so one barrier per operation suffices: operation `i + 2` writes the
-//! bank of operation `i` only after the barrier of operation `i + 1`, which every lane reaches
-//! after its read of operation `i`. Workgroup memory is a shared
-//! array of relaxed atomics; the barriers (mutex + condvar) order the accesses, exactly as the
-//! GPU's acquire/release barrier does, so a missing barrier shows up as a data race the tests can
-//! observe. Invocation `l` belongs to subgroup `l / width`, lane `l % width` — one of the mappings
-//! a GPU may use; kernels read the built-ins and never rely on it.
+//! Every invocation is a stackful coroutine (`corosensei`) running the kernel closure; one OS
+//! thread schedules all invocations of a workgroup in lock-step at every collective operation:
 //!
-//! Robustness: if an invocation panics, or if the invocations of a subgroup/workgroup do not all
-//! reach the same collective operation (non-uniform control flow) within [`DEADLOCK_TIMEOUT`],
-//! every waiting invocation panics with a message naming the barrier, so a broken kernel fails
-//! its test instead of hanging it.
+//! 1. Each invocation of a subgroup runs until its next collective operation and *suspends* with
+//!    a request: a shuffle (its value and source lane), a ballot (its vote) or the workgroup
+//!    barrier — or it returns.
+//! 2. When every lane of the subgroup waits on a subgroup operation, the scheduler checks that
+//!    they all wait on the same kind, computes every lane's answer from the posted values (a
+//!    shuffle reads the source lane's posted value, a ballot ORs the votes) and resumes each lane
+//!    with it. Repeat until the whole subgroup waits on the barrier or has returned.
+//! 3. When every subgroup waits on the barrier, all invocations are released (step 1 again).
+//!
+//! A switch costs tens of nanoseconds instead of the microseconds of the OS-thread emulation this
+//! replaced, so a 2^20-key sort emulates in seconds. Workgroups are independent and spread over
+//! the machine's cores; results come back in global invocation order.
+//!
+//! **Races.** Workgroup memory is plain cells owned by the workgroup's scheduler thread. Between
+//! two barriers the invocations run one after another, each up to its next collective operation;
+//! the order alternates between rounds (ascending lanes and subgroups, then descending), so a
+//! kernel that reads another invocation's store without a barrier between them reads the old
+//! value in one of the orders and fails its test.
+//!
+//! **Non-uniform control flow** (rule 1/2 of [`super`]) is detected, not hung on: lanes of a
+//! subgroup waiting on different operations, or some of them returned while others wait, panic
+//! with a message naming the subgroup and what each side waits on. A panicking invocation panics
+//! the whole dispatch with its own message (the suspended invocations are unwound and dropped).
+//!
+//! Invocation `l` belongs to subgroup `l / width`, lane `l % width` — one of the mappings a GPU
+//! may use; kernels read the built-ins and never rely on it.
 use super::{Coop, SharedU32};
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use std::sync::{Condvar, Mutex};
-use std::time::Duration;
-
-/// How long a barrier waits before declaring that an invocation never arrives.
-pub const DEADLOCK_TIMEOUT: Duration = Duration::from_secs(60);
+use corosensei::stack::DefaultStack;
+use corosensei::{Coroutine, CoroutineResult, Yielder};
+use std::cell::Cell;
+use std::sync::Mutex;
 
 /// Largest emulated subgroup: ballots carry 128 bits.
 pub const MAX_WIDTH: u32 = 128;
 
-struct BarrierState {
-    arrived: u32,
-    generation: u64,
-    poisoned: bool,
+/// Stack of one emulated invocation (debug builds of the kernels need more than release).
+const STACK_BYTES: usize = 256 * 1024;
+
+/// What a suspended invocation waits on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Request {
+    Shuffle { value: u32, src: u32 },
+    Ballot(bool),
+    Barrier,
 }
 
-/// A reusable barrier that can be poisoned (a panicking invocation releases everyone).
-struct PoisonBarrier {
-    n: u32,
-    what: &'static str,
-    state: Mutex<BarrierState>,
-    cv: Condvar,
-}
-
-impl PoisonBarrier {
-    fn new(n: u32, what: &'static str) -> Self {
-        Self {
-            n,
-            what,
-            state: Mutex::new(BarrierState { arrived: 0, generation: 0, poisoned: false }),
-            cv: Condvar::new(),
+impl Request {
+    fn name(self) -> &'static str {
+        match self {
+            Request::Shuffle { .. } => "a shuffle",
+            Request::Ballot(_) => "a ballot",
+            Request::Barrier => "the workgroup barrier",
         }
-    }
-
-    fn wait(&self) {
-        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        if s.poisoned {
-            panic!("{} barrier: another invocation panicked", self.what);
-        }
-        let gen = s.generation;
-        s.arrived += 1;
-        if s.arrived == self.n {
-            s.arrived = 0;
-            s.generation += 1;
-            self.cv.notify_all();
-            return;
-        }
-        while s.generation == gen && !s.poisoned {
-            let (next, timeout) = self
-                .cv
-                .wait_timeout(s, DEADLOCK_TIMEOUT)
-                .unwrap_or_else(|e| e.into_inner());
-            s = next;
-            if timeout.timed_out() && s.generation == gen {
-                s.poisoned = true;
-                self.cv.notify_all();
-                panic!(
-                    "{} barrier: only {} of {} invocations arrived (non-uniform control flow?)",
-                    self.what, s.arrived, self.n
-                );
-            }
-        }
-        if s.poisoned && s.generation == gen {
-            panic!("{} barrier: another invocation panicked", self.what);
-        }
-    }
-
-    fn poison(&self) {
-        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        s.poisoned = true;
-        self.cv.notify_all();
     }
 }
 
-struct SubgroupState {
-    barrier: PoisonBarrier,
-    /// Two banks of `width` slots / votes (alternate subgroup operations).
-    slots: Vec<AtomicU32>,
-    votes: Vec<AtomicBool>,
-}
+/// The answer an invocation is resumed with (a shuffle's value in word 0, or a ballot's mask).
+type Reply = [u32; 4];
 
 /// One emulated invocation's view of its workgroup.
-pub struct CpuCoop<'a> {
+pub struct CpuCoop<'y> {
     width: u32,
     lane: u32,
     subgroup_id: u32,
     num_subgroups: u32,
     local_index: u32,
-    subgroup: &'a SubgroupState,
-    workgroup: &'a PoisonBarrier,
-    /// Subgroup operations so far (their parity picks the bank).
-    ops: std::cell::Cell<u32>,
-}
-
-impl CpuCoop<'_> {
-    /// First slot of the bank of the next subgroup operation.
-    fn bank(&self) -> usize {
-        let n = self.ops.get();
-        self.ops.set(n.wrapping_add(1));
-        (n & 1) as usize * self.width as usize
-    }
+    yielder: &'y Yielder<Reply, Request>,
 }
 
 impl Coop for CpuCoop<'_> {
@@ -138,42 +90,30 @@ impl Coop for CpuCoop<'_> {
     }
     fn shuffle(&self, v: u32, src: u32) -> u32 {
         assert!(src < self.width, "shuffle source lane {src} >= subgroup width {}", self.width);
-        let bank = self.bank();
-        self.subgroup.slots[bank + self.lane as usize].store(v, Ordering::Relaxed);
-        self.subgroup.barrier.wait();
-        self.subgroup.slots[bank + src as usize].load(Ordering::Relaxed)
+        self.yielder.suspend(Request::Shuffle { value: v, src })[0]
     }
     fn shuffle_xor(&self, v: u32, mask: u32) -> u32 {
         self.shuffle(v, (self.lane ^ mask) % self.width)
     }
     fn ballot(&self, pred: bool) -> [u32; 4] {
-        let bank = self.bank();
-        self.subgroup.votes[bank + self.lane as usize].store(pred, Ordering::Relaxed);
-        self.subgroup.barrier.wait();
-        let mut m = [0u32; 4];
-        for (l, vote) in self.subgroup.votes[bank..bank + self.width as usize].iter().enumerate() {
-            if vote.load(Ordering::Relaxed) {
-                m[l / 32] |= 1 << (l % 32);
-            }
-        }
-        m
+        self.yielder.suspend(Request::Ballot(pred))
     }
     fn workgroup_barrier(&self) {
-        self.workgroup.wait();
+        self.yielder.suspend(Request::Barrier);
     }
 }
 
 /// One emulated invocation's handle on workgroup memory.
 pub struct CpuShared<'a> {
-    words: &'a [AtomicU32],
+    words: &'a [Cell<u32>],
 }
 
 impl SharedU32 for CpuShared<'_> {
     fn load(&self, i: u32) -> u32 {
-        self.words[i as usize].load(Ordering::Relaxed)
+        self.words[i as usize].get()
     }
     fn store(&mut self, i: u32, v: u32) {
-        self.words[i as usize].store(v, Ordering::Relaxed);
+        self.words[i as usize].set(v);
     }
 }
 
@@ -188,82 +128,338 @@ pub struct Emulation {
     pub shared_words: usize,
 }
 
-/// Runs `groups` workgroups one after the other; returns each invocation's result in global
-/// invocation order (`group * workgroup_size + local_index`).
+/// Where one invocation stands between two scheduler steps.
+enum State<R> {
+    /// Runnable; resumed with this reply.
+    Ready(Reply),
+    Waiting(Request),
+    Done(R),
+}
+
+/// Runs `groups` workgroups; returns each invocation's result in global invocation order
+/// (`group * workgroup_size + local_index`). Workgroups run in parallel on the machine's cores.
 pub fn run_workgroups<R, F>(emu: Emulation, groups: u32, kernel: F) -> Vec<R>
 where
     R: Send,
     F: Fn(u32, &CpuCoop<'_>, &mut CpuShared<'_>) -> R + Sync,
 {
-    let Emulation { width, workgroup_size, shared_words } = emu;
+    let Emulation { width, workgroup_size, .. } = emu;
     assert!(
         width.is_power_of_two() && width <= MAX_WIDTH,
         "subgroup width {width} must be a power of two <= {MAX_WIDTH}"
     );
     assert!(
-        workgroup_size >= width && workgroup_size % width == 0,
+        workgroup_size >= width && workgroup_size.is_multiple_of(width),
         "workgroup size {workgroup_size} must be a multiple of the subgroup width {width}"
     );
-    let num_subgroups = workgroup_size / width;
-    let mut out = Vec::with_capacity((groups * workgroup_size) as usize);
-    for group in 0..groups {
-        let shared: Vec<AtomicU32> = (0..shared_words).map(|_| AtomicU32::new(0)).collect();
-        let subgroups: Vec<SubgroupState> = (0..num_subgroups)
-            .map(|_| SubgroupState {
-                barrier: PoisonBarrier::new(width, "subgroup"),
-                slots: (0..2 * width).map(|_| AtomicU32::new(0)).collect(),
-                votes: (0..2 * width).map(|_| AtomicBool::new(false)).collect(),
+    // Enough groups per thread that the stacks' set-up is amortised.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u32;
+    let threads = threads.min(groups.div_ceil(4)).max(1);
+    if threads == 1 {
+        return Worker::new(emu).run(0..groups, &kernel);
+    }
+    let per = groups.div_ceil(threads);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let range = (t * per).min(groups)..((t + 1) * per).min(groups);
+                let kernel = &kernel;
+                s.spawn(move || Worker::new(emu).run(range, kernel))
             })
             .collect();
-        let wg_barrier = PoisonBarrier::new(workgroup_size, "workgroup");
-        let results: Vec<R> = std::thread::scope(|s| {
-            let handles: Vec<_> = (0..workgroup_size)
-                .map(|local_index| {
-                    let sg = &subgroups[(local_index / width) as usize];
-                    let (kernel, shared, wg_barrier) = (&kernel, &shared, &wg_barrier);
-                    std::thread::Builder::new()
-                        .stack_size(256 * 1024)
-                        .spawn_scoped(s, move || {
-                            let ctx = CpuCoop {
-                                width,
-                                lane: local_index % width,
-                                subgroup_id: local_index / width,
-                                num_subgroups,
-                                local_index,
-                                subgroup: sg,
-                                workgroup: wg_barrier,
-                                ops: std::cell::Cell::new(0),
-                            };
-                            let mut mem = CpuShared { words: shared };
-                            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                                kernel(group, &ctx, &mut mem)
-                            }));
-                            if r.is_err() {
-                                sg.barrier.poison();
-                                wg_barrier.poison();
-                            }
-                            r
-                        })
-                        .expect("spawning an emulated invocation")
-                })
-                .collect();
-            let joined: Vec<_> = handles.into_iter().map(|h| h.join()).collect();
-            let mut results = Vec::with_capacity(joined.len());
-            let mut first_panic = None;
-            for j in joined {
-                match j {
-                    Ok(Ok(r)) => results.push(r),
-                    Ok(Err(p)) | Err(p) => {
-                        first_panic.get_or_insert(p);
-                    }
+        let mut out = Vec::with_capacity((groups * workgroup_size) as usize);
+        let mut first_panic = None;
+        for h in handles {
+            match h.join() {
+                Ok(part) => out.extend(part),
+                Err(p) => {
+                    first_panic.get_or_insert(p);
                 }
             }
-            if let Some(p) = first_panic {
-                std::panic::resume_unwind(p);
-            }
-            results
-        });
-        out.extend(results);
+        }
+        // Re-raise the kernel's own panic (its message), not the scope's generic one.
+        if let Some(p) = first_panic {
+            std::panic::resume_unwind(p);
+        }
+        out
+    })
+}
+
+/// One scheduler thread: the invocations' stacks and the workgroup memory, reused by every
+/// workgroup it runs.
+struct Worker {
+    emu: Emulation,
+    stacks: Vec<DefaultStack>,
+    shared: Vec<Cell<u32>>,
+}
+
+/// Stacks of finished workers, reused by later dispatches: a fresh stack costs an `mmap`, a guard
+/// page and a page fault per touched page, which dominated dispatches of small workgroups.
+static STACK_POOL: Mutex<Vec<DefaultStack>> = Mutex::new(Vec::new());
+
+/// Most stacks kept in [`STACK_POOL`] (128 MiB of address space, a few pages of each touched).
+const POOL_CAPACITY: usize = 512;
+
+impl Worker {
+    fn new(emu: Emulation) -> Self {
+        let n = emu.workgroup_size as usize;
+        let mut stacks = {
+            let mut pool = STACK_POOL.lock().unwrap_or_else(|e| e.into_inner());
+            let keep = pool.len().saturating_sub(n);
+            pool.split_off(keep)
+        };
+        while stacks.len() < n {
+            stacks.push(DefaultStack::new(STACK_BYTES).expect("allocating an emulated invocation's stack"));
+        }
+        Self { emu, stacks, shared: (0..emu.shared_words).map(|_| Cell::new(0)).collect() }
     }
-    out
+
+    fn run<R, F>(mut self, groups: std::ops::Range<u32>, kernel: &F) -> Vec<R>
+    where
+        F: Fn(u32, &CpuCoop<'_>, &mut CpuShared<'_>) -> R,
+    {
+        let mut out = Vec::with_capacity(groups.len() * self.emu.workgroup_size as usize);
+        for group in groups {
+            // Workgroup memory starts zeroed in every workgroup (a GPU leaves it undefined;
+            // kernels here never read before writing).
+            self.shared.iter().for_each(|w| w.set(0));
+            out.extend(self.group(group, kernel));
+        }
+        let mut pool = STACK_POOL.lock().unwrap_or_else(|e| e.into_inner());
+        let room = POOL_CAPACITY.saturating_sub(pool.len());
+        pool.extend(self.stacks.drain(..).take(room));
+        out
+    }
+
+    /// Runs one workgroup to completion (steps 1–3 of the module doc).
+    fn group<R, F>(&mut self, group: u32, kernel: &F) -> Vec<R>
+    where
+        F: Fn(u32, &CpuCoop<'_>, &mut CpuShared<'_>) -> R,
+    {
+        let Emulation { width, workgroup_size, .. } = self.emu;
+        let num_subgroups = workgroup_size / width;
+        let shared = &self.shared[..];
+        let mut coroutines: Vec<Coroutine<Reply, Request, R, &mut DefaultStack>> = self
+            .stacks
+            .iter_mut()
+            .zip(0..)
+            .map(|(stack, local_index)| {
+                let body = move |yielder: &Yielder<Reply, Request>, _: Reply| {
+                    let ctx = CpuCoop {
+                        width,
+                        lane: local_index % width,
+                        subgroup_id: local_index / width,
+                        num_subgroups,
+                        local_index,
+                        yielder,
+                    };
+                    kernel(group, &ctx, &mut CpuShared { words: shared })
+                };
+                // SAFETY: the body borrows `kernel`, `shared` and the stack, all of which outlive
+                // `coroutines`: it is a local of this function, dropped (which unwinds any
+                // suspended invocation) before they go, also on a panic; it is never leaked.
+                unsafe { Coroutine::with_stack_unchecked(stack, body) }
+            })
+            .collect();
+        let mut state: Vec<State<R>> = (0..workgroup_size).map(|_| State::Ready([0; 4])).collect();
+        let mut round = 0u32;
+        loop {
+            // Alternate the order between rounds (see "Races" in the module doc).
+            let backwards = round & 1 == 1;
+            round = round.wrapping_add(1);
+            for s in 0..num_subgroups {
+                let s = if backwards { num_subgroups - 1 - s } else { s };
+                let lanes = (s * width) as usize..((s + 1) * width) as usize;
+                run_subgroup(&mut coroutines[lanes.clone()], &mut state[lanes], backwards, group, s);
+            }
+            // Every subgroup now waits on the barrier or has returned.
+            let at_barrier = state.iter().filter(|st| matches!(st, State::Waiting(Request::Barrier))).count();
+            if at_barrier == 0 {
+                break;
+            }
+            if at_barrier < state.len() {
+                let first_done = state.iter().position(|st| matches!(st, State::Done(_))).unwrap_or(0);
+                panic!(
+                    "workgroup {group}: {at_barrier} of {workgroup_size} invocations wait on the workgroup \
+                     barrier while invocation {first_done} has returned (non-uniform control flow)"
+                );
+            }
+            state.iter_mut().for_each(|st| *st = State::Ready([0; 4]));
+        }
+        drop(coroutines);
+        state
+            .into_iter()
+            .map(|st| match st {
+                State::Done(r) => r,
+                _ => unreachable!("every invocation returned"),
+            })
+            .collect()
+    }
+}
+
+/// Step 1–2 for one subgroup: runs its lanes from operation to operation until all of them wait
+/// on the workgroup barrier or have returned.
+fn run_subgroup<R>(
+    coroutines: &mut [Coroutine<Reply, Request, R, &mut DefaultStack>],
+    state: &mut [State<R>],
+    backwards: bool,
+    group: u32,
+    subgroup: u32,
+) {
+    let width = state.len();
+    loop {
+        for i in 0..width {
+            let lane = if backwards { width - 1 - i } else { i };
+            if let State::Ready(reply) = state[lane] {
+                state[lane] = match coroutines[lane].resume(reply) {
+                    CoroutineResult::Yield(request) => State::Waiting(request),
+                    CoroutineResult::Return(r) => State::Done(r),
+                };
+            }
+        }
+        let request = |st: &State<R>| match st {
+            State::Waiting(r) => Some(*r),
+            _ => None,
+        };
+        let kind = |st: &State<R>| request(st).map(|r| std::mem::discriminant(&r));
+        if let Some(other) = (1..width).find(|&l| kind(&state[l]) != kind(&state[0])) {
+            let describe = |st: &State<R>| match request(st) {
+                Some(r) => format!("waits on {}", r.name()),
+                None => "has returned".to_string(),
+            };
+            panic!(
+                "workgroup {group}, subgroup {subgroup}: lane 0 {} but lane {other} {} \
+                 (non-uniform control flow around a collective operation)",
+                describe(&state[0]),
+                describe(&state[other])
+            );
+        }
+        match request(&state[0]) {
+            Some(Request::Shuffle { .. }) => {
+                let mut posted = [(0u32, 0u32); MAX_WIDTH as usize];
+                for (p, st) in posted.iter_mut().zip(state.iter()) {
+                    if let State::Waiting(Request::Shuffle { value, src }) = *st {
+                        *p = (value, src);
+                    }
+                }
+                for (st, &(_, src)) in state.iter_mut().zip(&posted) {
+                    *st = State::Ready([posted[src as usize].0, 0, 0, 0]);
+                }
+            }
+            Some(Request::Ballot(_)) => {
+                let mut mask = [0u32; 4];
+                for (l, st) in state.iter().enumerate() {
+                    if let State::Waiting(Request::Ballot(true)) = st {
+                        mask[l / 32] |= 1 << (l % 32);
+                    }
+                }
+                state.iter_mut().for_each(|st| *st = State::Ready(mask));
+            }
+            Some(Request::Barrier) | None => return,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn emu(width: u32, workgroup_size: u32, shared_words: usize) -> Emulation {
+        Emulation { width, workgroup_size, shared_words }
+    }
+
+    /// Shuffles, ballots and the built-ins at every width the emulation supports, with several
+    /// subgroups per workgroup and several workgroups.
+    #[test]
+    fn shuffle_and_ballot_follow_their_definitions() {
+        for width in [1, 2, 4, 8, 16, 32, 64, 128] {
+            let wg = 2 * width.max(4);
+            let out = run_workgroups(emu(width, wg, 0), 3, |g, c, _| {
+                let me = g * 1000 + c.local_index();
+                let from_next = c.shuffle(me, (c.lane() + 1) % c.subgroup_size());
+                let xor = c.shuffle_xor(me, 1);
+                let odd = c.ballot(c.lane() % 2 == 1);
+                (c.lane(), c.subgroup_id(), c.num_subgroups(), from_next, xor, odd)
+            });
+            assert_eq!(out.len(), 3 * wg as usize);
+            for (i, &(lane, sg, nsg, from_next, xor, odd)) in out.iter().enumerate() {
+                let (g, l) = (i as u32 / wg, i as u32 % wg);
+                assert_eq!((lane, sg, nsg), (l % width, l / width, wg / width), "width {width}");
+                assert_eq!(from_next, g * 1000 + sg * width + (lane + 1) % width, "width {width}");
+                assert_eq!(xor, g * 1000 + sg * width + (lane ^ 1) % width, "width {width}");
+                let mut expected = [0u32; 4];
+                for k in (1..width).step_by(2) {
+                    expected[(k / 32) as usize] |= 1 << (k % 32);
+                }
+                assert_eq!(odd, expected, "width {width}");
+            }
+        }
+    }
+
+    /// Workgroup memory written before a barrier is seen by every invocation after it.
+    #[test]
+    fn barrier_publishes_workgroup_memory() {
+        let out = run_workgroups(emu(8, 64, 64), 5, |g, c, s| {
+            s.store(c.local_index(), g * 100 + c.local_index());
+            c.workgroup_barrier();
+            let (prev, next) = ((c.local_index() + 63) % 64, (c.local_index() + 1) % 64);
+            (s.load(prev), s.load(next))
+        });
+        for (i, &(prev, next)) in out.iter().enumerate() {
+            let (g, l) = (i as u32 / 64, i as u32 % 64);
+            assert_eq!((prev, next), (g * 100 + (l + 63) % 64, g * 100 + (l + 1) % 64));
+        }
+    }
+
+    /// Without the barrier, some invocation reads a neighbour's slot before the neighbour wrote
+    /// it — in one direction or the other, whatever the order the emulation runs them in — so a
+    /// kernel missing a barrier fails its test.
+    #[test]
+    fn a_missing_barrier_is_observable() {
+        for width in [4, 8, 64] {
+            let out = run_workgroups(emu(width, 64, 64), 1, |_, c, s| {
+                s.store(c.local_index(), c.local_index() + 1);
+                let (prev, next) = ((c.local_index() + 63) % 64, (c.local_index() + 1) % 64);
+                (s.load(prev), s.load(next))
+            });
+            let stale = out.iter().filter(|&&(p, n)| p == 0 || n == 0).count();
+            assert!(stale > 0, "width {width}: every read saw its neighbour's store without a barrier");
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "lane 0 waits on a shuffle but lane 1 has returned")]
+    fn lanes_skipping_a_shuffle_are_reported() {
+        run_workgroups(emu(4, 4, 0), 1, |_, c, _| if c.lane() == 0 { c.shuffle(1, 0) } else { 0 });
+    }
+
+    #[test]
+    #[should_panic(expected = "waits on a ballot but lane 2 waits on a shuffle")]
+    fn lanes_at_different_operations_are_reported() {
+        run_workgroups(emu(4, 4, 0), 1, |_, c, _| if c.lane() < 2 { c.ballot(true)[0] } else { c.shuffle(1, 0) });
+    }
+
+    #[test]
+    #[should_panic(expected = "non-uniform control flow")]
+    fn a_subgroup_skipping_the_barrier_is_reported() {
+        run_workgroups(emu(4, 16, 0), 2, |_, c, _| {
+            if c.subgroup_id() != 1 {
+                c.workgroup_barrier();
+            }
+        });
+    }
+
+    /// A panic inside an invocation reaches the caller with its own message, from any worker
+    /// thread, and the suspended invocations are unwound.
+    #[test]
+    #[should_panic(expected = "invocation 37 of workgroup 41")]
+    fn a_panicking_invocation_fails_the_dispatch_with_its_message() {
+        run_workgroups(emu(8, 64, 0), 64, |g, c, _| {
+            c.workgroup_barrier();
+            if g == 41 && c.local_index() == 37 {
+                panic!("invocation 37 of workgroup 41");
+            }
+            c.shuffle(g, 0)
+        });
+    }
 }

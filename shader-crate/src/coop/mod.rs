@@ -6,16 +6,17 @@
 //!
 //! * [`Coop`] — the invocation's place in its subgroup/workgroup and the subgroup/workgroup
 //!   operations. [`gpu::GpuCoop`] maps them 1:1 to SPIR-V (`OpGroupNonUniform*`,
-//!   `OpControlBarrier`); [`cpu`] emulates a workgroup with one OS thread per invocation run in
+//!   `OpControlBarrier`); [`cpu`] emulates a workgroup with one coroutine per invocation run in
 //!   lock-step at every collective operation, with the subgroup width as a parameter (4…64), so
 //!   the same kernel is tested at widths the local GPU does not have.
 //! * [`SharedU32`] — workgroup memory as an array of `u32`. On the GPU it is the
 //!   `#[spirv(workgroup)] &mut [u32; N]` entry parameter itself; on the CPU a handle over
-//!   atomics shared by the emulated invocations.
+//!   cells shared by the emulated invocations of one workgroup.
 //!
 //! Rules a cooperative kernel follows (they are also the GPU's rules):
 //! 1. Subgroup operations are called in subgroup-uniform control flow: every lane of the subgroup
-//!    reaches the same call (the CPU emulation deadlocks on a test otherwise, which is the point).
+//!    reaches the same call (the CPU emulation detects a violation and fails the test with a
+//!    message naming the subgroup).
 //! 2. `workgroup_barrier` is called in workgroup-uniform control flow.
 //! 3. Lane numbering comes from the built-ins (`lane()`, `subgroup_id()`), never from
 //!    `local_index % width`: Vulkan does not promise that mapping.
