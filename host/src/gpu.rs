@@ -101,8 +101,9 @@ impl Kernels {
 
 pub struct Gpu {
     pub kernels: Kernels,
-    /// The G-buffer raster pipelines (graphics module), indexed like `render::gbuffer::VARIANTS`.
-    pub gbuffer: [crate::vk::GraphicsPipeline; 3],
+    /// The G-buffer raster pipelines (graphics module): `[normal target][variant]`
+    /// (`render::gbuffer::normal_target`, `render::gbuffer::VARIANTS`).
+    pub gbuffer: [[crate::vk::GraphicsPipeline; 3]; 2],
     pub ctx: Context,
 }
 

@@ -57,7 +57,8 @@ pub struct RenderArgs {
     pub seed: u64,
     #[arg(long, value_enum, default_value_t = View::Shaded)]
     pub view: View,
-    /// Octahedral encoding of the G-buffer normals (a 32-bit target: 2×8, 2×12 or 2×16 bits).
+    /// Encoding of the G-buffer normals: octahedral 2×8, 2×12 or 2×16 bits in a 32-bit target, or
+    /// float32 components in a 128-bit one.
     #[arg(long, value_enum, default_value_t = NormalPrecision::Oct16)]
     pub normal_precision: NormalPrecision,
     /// Children per light-BVH node for `clustered-bvh`: 32 or 64 (default: the subgroup width,
@@ -85,6 +86,8 @@ pub enum NormalPrecision {
     Oct8,
     Oct12,
     Oct16,
+    /// Three float32 components (a 16-byte normal target): lossless, the accuracy reference.
+    F32,
 }
 
 impl NormalPrecision {
@@ -94,6 +97,7 @@ impl NormalPrecision {
             Self::Oct8 => PRECISION_OCT8,
             Self::Oct12 => PRECISION_OCT12,
             Self::Oct16 => PRECISION_OCT16,
+            Self::F32 => PRECISION_F32,
         }
     }
 }

@@ -48,14 +48,29 @@ pub fn gbuffer_albedo(word: u32) -> (Vec3, u32) {
     (Vec3::new(c(0), c(8), c(16)), word >> 24)
 }
 
+/// Decoded G-buffer normal of pixel `i` from the normal buffer: one word per pixel (octahedral),
+/// or four (`F32`: three bit patterns and a pad), per `p.normal_precision` (frame-uniform, so the
+/// branch never diverges).
+#[inline]
+pub fn gbuffer_normal(p: &FrameParams, normals: &[u32], i: u32) -> Vec3 {
+    let precision = octahedral::Precision::from_u32(p.normal_precision);
+    let words = if precision.gbuffer_words() == 4 {
+        let b = 4 * i as usize;
+        [normals[b], normals[b + 1], normals[b + 2]]
+    } else {
+        [normals[i as usize], 0, 0]
+    };
+    Vec3::from_array(octahedral::decode(words, precision))
+}
+
 /// Shading inputs of one pixel: view position, normal, albedo, material.
 #[inline]
-pub fn surface(p: &FrameParams, i: u32, depth: f32, normal: u32, albedo: u32) -> (Vec3, Vec3, Vec3, u32) {
+pub fn surface(p: &FrameParams, i: u32, depth: f32, normals: &[u32], albedo: u32) -> (Vec3, Vec3, Vec3, u32) {
     let g = &p.grid;
     let (px, py) = (i % g.width, i / g.width);
     let d = reconstruct::distance_from_depth(g.near, depth);
     let pos = reconstruct::view_position(g, px, py, d);
-    let n = Vec3::from_array(octahedral::decode([normal, 0, 0], octahedral::Precision::from_u32(p.normal_precision)));
+    let n = gbuffer_normal(p, normals, i);
     let (a, m) = gbuffer_albedo(albedo);
     (pos, n, a, m)
 }
@@ -315,7 +330,7 @@ fn shade_clustered_impl<const SPECULAR: bool>(
         frame[i as usize] = BACKGROUND_RGBA8;
         return;
     }
-    let (pos, n, albedo, m) = surface(p, i, depth[i as usize], normals[i as usize], albedo[i as usize]);
+    let (pos, n, albedo, m) = surface(p, i, depth[i as usize], normals, albedo[i as usize]);
     let mat = materials[m as usize];
     let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
     let (first, count) = (offsets[cluster], counts[cluster]);
@@ -379,7 +394,7 @@ fn shade_deferred_impl<const SPECULAR: bool>(
         frame[i as usize] = BACKGROUND_RGBA8;
         return;
     }
-    let (pos, n, albedo, m) = surface(p, i, z, normals[i as usize], albedo[i as usize]);
+    let (pos, n, albedo, m) = surface(p, i, z, normals, albedo[i as usize]);
     let mat = materials[m as usize];
     let mut sum = Vec3::ZERO;
     let mut touching = 0;

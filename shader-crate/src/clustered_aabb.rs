@@ -396,7 +396,7 @@ fn shade_aabb_impl<const SPECULAR: bool>(
         frame[i as usize] = BACKGROUND_RGBA8;
         return;
     }
-    let (pos, n, alb, m) = surface(p, i, depth[i as usize], normals[i as usize], albedo[i as usize]);
+    let (pos, n, alb, m) = surface(p, i, depth[i as usize], normals, albedo[i as usize]);
     let mat = materials[m as usize];
     let effects = if SPECULAR { EFFECT_SPECULAR } else { 0 };
     let (first, count) = (offsets[cluster as usize], counts[cluster as usize]);

@@ -209,6 +209,17 @@ impl Precision {
         }
     }
 
+    /// Words per pixel of the G-buffer's normal target: 1 (`R32_UINT`, an octahedral code) or 4
+    /// for `F32` (`R32G32B32A32_UINT`: the three bit patterns and a zero; no 96-bit colour
+    /// format is renderable).
+    #[inline]
+    pub const fn gbuffer_words(self) -> u32 {
+        match self {
+            Precision::F32 => 4,
+            _ => 1,
+        }
+    }
+
     /// [`max_angular_error_bound`]`(self.bits())`.
     #[inline]
     pub const fn max_angular_error_bound(self) -> f32 {

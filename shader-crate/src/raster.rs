@@ -6,13 +6,16 @@
 //! * Reversed-Z with an infinite far plane: stored depth `= near / d` (1 at the near plane, 0 at
 //!   infinity; cleared to 0, test GREATER). Distances reconstruct as `near / depth`
 //!   (`reconstruct::distance_from_depth`), with float precision where it matters (far away).
-//! * Targets (each copied into its own storage buffer after the pass): `R32_UINT` view-space normal, octahedral at the draw's precision (2×8 / 2×12 /
-//!   2×16 bit, `octahedral`); `RGBA8_UNORM` linear albedo with the material index in alpha
-//!   (`index / 255`), whose specular/roughness the shading pass reads from a material buffer.
-//!   8 + 4 bytes per pixel beside the 4-byte depth.
+//! * Targets (each copied into its own storage buffer after the pass): the view-space normal at
+//!   the draw's precision (`octahedral`): `R32_UINT` holding a 2×8 / 2×12 / 2×16-bit octahedral
+//!   code, or `R32G32B32A32_UINT` holding three float32 bit patterns (the `_f32` fragment
+//!   variants, the accuracy study's lossless reference); `RGBA8_UNORM` linear albedo with the
+//!   material index in alpha (`index / 255`), whose specular/roughness the shading pass reads
+//!   from a material buffer. 4 (or 16) + 4 bytes per pixel beside the 4-byte depth, each once
+//!   as a target and once as a buffer.
 use crate::layout::{DrawParams, RasterCamera};
 use crate::octahedral::{self, Precision};
-use spirv_std::glam::{Mat4, Vec2, Vec3, Vec4};
+use spirv_std::glam::{Mat4, UVec4, Vec2, Vec3, Vec4};
 use spirv_std::image::SampledImage;
 use spirv_std::Image;
 use spirv_std::spirv;
@@ -23,10 +26,11 @@ pub fn fetch3(buf: &[f32], i: usize) -> Vec3 {
     Vec3::new(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2])
 }
 
-/// View-space normal → G-buffer word. A zero or NaN normal encodes as +Z (facing the camera).
+/// View-space normal → G-buffer words (word 0 alone for the octahedral precisions). A zero or
+/// NaN normal encodes as +Z (facing the camera).
 #[inline]
-pub fn encode_gbuffer_normal(n_view: Vec3, precision: u32) -> u32 {
-    octahedral::encode(n_view.to_array(), Precision::from_u32(precision))[0]
+pub fn encode_gbuffer_normal(n_view: Vec3, precision: u32) -> [u32; 3] {
+    octahedral::encode(n_view.to_array(), Precision::from_u32(precision))
 }
 
 /// A combined image sampler of 2D float colour data.
@@ -99,21 +103,41 @@ pub fn gbuffer_fs(
     out_normal: &mut u32,
     out_albedo: &mut Vec4,
 ) {
-    write_targets(in_normal, front_facing, Vec3::ONE, draw, out_normal, out_albedo);
+    let (n, a) = targets(in_normal, front_facing, Vec3::ONE, draw);
+    (*out_normal, *out_albedo) = (n[0], a);
 }
 
-/// The G-buffer writes every fragment variant shares: the normal facing the viewed side,
-/// octahedral-encoded; albedo = material colour × `texel`, with the material index in alpha.
+/// [`gbuffer_fs`] writing a float32 normal (`R32G32B32A32_UINT` target).
+#[spirv(fragment)]
+pub fn gbuffer_fs_f32(
+    in_normal: Vec3,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    out_normal: &mut UVec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, Vec3::ONE, draw);
+    (*out_normal, *out_albedo) = (wide_normal(n), a);
+}
+
+/// The G-buffer values every fragment variant writes: the normal facing the viewed side,
+/// encoded at the draw's precision; albedo = material colour × `texel`, with the material index
+/// in alpha.
 #[inline]
-pub fn write_targets(in_normal: Vec3, front_facing: bool, texel: Vec3, draw: &DrawParams, out_normal: &mut u32, out_albedo: &mut Vec4) {
+pub fn targets(in_normal: Vec3, front_facing: bool, texel: Vec3, draw: &DrawParams) -> ([u32; 3], Vec4) {
     // Two-sided surfaces: the normal faces the side being seen.
     let n = if front_facing { in_normal } else { -in_normal };
-    *out_normal = encode_gbuffer_normal(n, draw.normal_precision);
     // Quantised here, exactly (round to nearest): the UNORM8 target then stores `k/255`, which
     // every rounding mode Vulkan allows converts back to `k`, so Forward+ (which computes the same
     // `unorm8`) sees the albedo the deferred passes read, on any driver.
     let a = Vec3::from_array(draw.albedo) * texel;
-    *out_albedo = Vec4::new(unorm8(a.x), unorm8(a.y), unorm8(a.z), draw.material as f32 / 255.0);
+    (encode_gbuffer_normal(n, draw.normal_precision), Vec4::new(unorm8(a.x), unorm8(a.y), unorm8(a.z), draw.material as f32 / 255.0))
+}
+
+/// The four words of the float32 normal target.
+#[inline]
+pub fn wide_normal(w: [u32; 3]) -> UVec4 {
+    UVec4::new(w[0], w[1], w[2], 0)
 }
 
 /// A channel as the `UNORM8` G-buffer stores and the shading passes decode it: clamped to
@@ -162,8 +186,24 @@ pub fn gbuffer_fs_textured(
     out_normal: &mut u32,
     out_albedo: &mut Vec4,
 ) {
-    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-    write_targets(in_normal, front_facing, texel, draw, out_normal, out_albedo);
+    let (n, a) = targets(in_normal, front_facing, sample_draw_uniform(albedo_map, in_uv).truncate(), draw);
+    (*out_normal, *out_albedo) = (n[0], a);
+}
+
+/// [`gbuffer_fs_textured`] writing a float32 normal.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_textured_f32(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    out_normal: &mut UVec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, sample_draw_uniform(albedo_map, in_uv).truncate(), draw);
+    (*out_normal, *out_albedo) = (wide_normal(n), a);
 }
 
 /// Alpha-tested textured draws (Sponza's foliage and chains): fragments whose mask coverage is
@@ -180,10 +220,33 @@ pub fn gbuffer_fs_masked(
     out_normal: &mut u32,
     out_albedo: &mut Vec4,
 ) {
-    let coverage = sample_draw_uniform(mask_map, in_uv);
-    if coverage.x < ALPHA_CUTOFF {
+    let (n, a) = targets(in_normal, front_facing, masked_texel(albedo_map, mask_map, in_uv), draw);
+    (*out_normal, *out_albedo) = (n[0], a);
+}
+
+/// [`gbuffer_fs_masked`] writing a float32 normal.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_masked_f32(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    #[spirv(descriptor_set = 0, binding = 5)] mask_map: &Texture2d,
+    out_normal: &mut UVec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, masked_texel(albedo_map, mask_map, in_uv), draw);
+    (*out_normal, *out_albedo) = (wide_normal(n), a);
+}
+
+/// The albedo texel of an alpha-tested fragment; fragments whose mask coverage is below
+/// [`ALPHA_CUTOFF`] are demoted to helpers first.
+#[inline]
+fn masked_texel(albedo_map: &Texture2d, mask_map: &Texture2d, uv: Vec2) -> Vec3 {
+    if sample_draw_uniform(mask_map, uv).x < ALPHA_CUTOFF {
         spirv_std::arch::demote_to_helper_invocation();
     }
-    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-    write_targets(in_normal, front_facing, texel, draw, out_normal, out_albedo);
+    sample_draw_uniform(albedo_map, uv).truncate()
 }

@@ -101,8 +101,8 @@ pub fn forward_colour(
     let (px, py) = (frag.x as u32, frag.y as u32);
     let pos = reconstruct::view_position(g, px, py, reconstruct::distance_from_depth(g.near, frag.z));
     let facing = if front_facing { in_normal } else { -in_normal };
-    let word = encode_gbuffer_normal(facing, p.draw.normal_precision);
-    let n = Vec3::from_array(octahedral::decode([word, 0, 0], Precision::from_u32(f.normal_precision)));
+    // The normal the deferred passes would read back from the G-buffer (any precision).
+    let n = Vec3::from_array(octahedral::decode(encode_gbuffer_normal(facing, p.draw.normal_precision), Precision::from_u32(f.normal_precision)));
     let a = Vec3::from_array(p.draw.albedo) * texel;
     let albedo = Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z));
     let mat = materials[p.draw.material as usize];

@@ -402,7 +402,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
         while slot < MAX_PIXELS_PER_INVOCATION {
             let i = out.pixels[slot as usize];
             if geo[slot as usize] != 0 {
-                let (pos, nrm, alb, m) = clustered::surface(fp, i, depth[i as usize], normals[i as usize], albedo[i as usize]);
+                let (pos, nrm, alb, m) = clustered::surface(fp, i, depth[i as usize], normals, albedo[i as usize]);
                 let mat = materials[m as usize];
                 let effects = if SPECULAR { EFFECT_SPECULAR } else { 0 };
                 let mut sum = sums[slot as usize];
@@ -432,7 +432,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     while slot < MAX_PIXELS_PER_INVOCATION {
         let i = out.pixels[slot as usize];
         if geo[slot as usize] != 0 {
-            let (pos, nrm, _, _) = clustered::surface(fp, i, depth[i as usize], normals[i as usize], albedo[i as usize]);
+            let (pos, nrm, _, _) = clustered::surface(fp, i, depth[i as usize], normals, albedo[i as usize]);
             out.colours[slot as usize] = clustered::output_colour(fp, bounds, i, pos, nrm, sums[slot as usize], out.tile_lights);
         }
         slot += 1;

@@ -183,7 +183,7 @@ pub(crate) fn reference_pixel(fp: &FrameParams, gb: &GBuffer, lights: &[PointLig
     if reconstruct::is_background(z) {
         return clustered::BACKGROUND_RGBA8;
     }
-    let (pos, n, a, m) = clustered::surface(fp, i, z, gb.normals[i as usize], gb.albedo[i as usize]);
+    let (pos, n, a, m) = clustered::surface(fp, i, z, &gb.normals, gb.albedo[i as usize]);
     let mat = materials[m as usize];
     let mut sum = Vec3::ZERO;
     for l in lights {

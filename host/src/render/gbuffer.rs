@@ -1,16 +1,21 @@
 //! G-buffer pass: rasterise the scene (rust-gpu `raster::gbuffer_vs/fs`) into depth, normal and
-//! albedo targets, then copy each into a storage buffer of one word per pixel that every compute
-//! pass and CPU reference reads (one buffer each: at 7680×4320 a word per pixel is 133 MB, just
-//! inside lavapipe's 128 MiB storage-buffer range).
+//! albedo targets, then copy each into a storage buffer that every compute pass and CPU reference
+//! reads (one buffer each: at 7680×4320 a word per pixel is 133 MB, just inside lavapipe's
+//! 128 MiB storage-buffer range).
 //!
-//! Memory: targets 4 + 4 + 4 B/px, plus 12 B/px of buffers (24 MB at 1080p in all).
+//! The normal target is one word per pixel (`R32_UINT`, an octahedral code) or, with float32
+//! normals, four (`R32G32B32A32_UINT`: three bit patterns and a pad; the `_f32` fragment
+//! variants write it). Memory: targets 4 + 4 (16) + 4 B/px, plus the same again as buffers:
+//! 24 MB at 1080p in all, 49 MB with float32 normals.
 use crate::gpu::Gpu;
 use crate::vk::image::upload_rgba8;
 use crate::vk::{Buffer, Context, GraphicsPipeline, Image, RasterDesc, Recorder, Sampler, ShaderModule, VkResult};
 use ash::vk;
 use shaders::layout::{DrawParams, RasterCamera};
+use shaders::octahedral::Precision;
 
-pub const NORMAL_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// Normal target formats: `[octahedral, float32]`.
+pub const NORMAL_FORMATS: [vk::Format; 2] = [vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT];
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
@@ -18,36 +23,47 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const GRAPHICS_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_GRAPHICS_SPV"));
 
 /// G-buffer pipeline variants, by what a draw's material needs: `(name, vertex, fragment,
-/// combined image samplers)`. A scene without textures binds and samples none.
+/// combined image samplers)`. A scene without textures binds and samples none. Each fragment
+/// entry has a float32-normal twin named `<entry>_f32`.
 pub const VARIANTS: [(&str, &str, &str, u32); 3] = [
     ("gbuffer", "raster::gbuffer_vs", "raster::gbuffer_fs", 0),
     ("gbuffer textured", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured", 1),
     ("gbuffer alpha-tested", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked", 2),
 ];
 
-/// The G-buffer pipelines, indexed like [`VARIANTS`].
-pub fn pipelines(ctx: &Context) -> VkResult<[GraphicsPipeline; 3]> {
+/// Index into [`NORMAL_FORMATS`] and the outer index of [`pipelines`] for a `PRECISION_*`.
+pub fn normal_target(precision: u32) -> usize {
+    usize::from(Precision::from_u32(precision).gbuffer_words() == 4)
+}
+
+/// The G-buffer pipelines: `[normal target][variant]` (see [`normal_target`], [`VARIANTS`]).
+pub fn pipelines(ctx: &Context) -> VkResult<[[GraphicsPipeline; 3]; 2]> {
     let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
-    let make = |(name, vertex_entry, fragment_entry, fragment_samplers): (&str, &str, &str, u32)| {
+    let make = |target: usize, (name, vertex_entry, fragment, fragment_samplers): (&str, &str, &str, u32)| {
+        let fragment_f32 = format!("{fragment}_f32");
+        let (name, fragment_entry) = if target == 1 { (format!("{name} (float32 normals)"), fragment_f32.as_str()) } else { (name.to_string(), fragment) };
         GraphicsPipeline::new(
             ctx,
             &module,
             &RasterDesc {
-                name,
+                name: &name,
                 vertex_entry,
                 fragment_entry,
                 vertex_storage_buffers: 4,
                 fragment_storage_buffers: 0,
                 fragment_samplers,
                 push_constant_bytes: std::mem::size_of::<DrawParams>() as u32,
-                color_formats: &[NORMAL_FORMAT, ALBEDO_FORMAT],
+                color_formats: &[NORMAL_FORMATS[target], ALBEDO_FORMAT],
                 depth_format: DEPTH_FORMAT,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
             },
         )
     };
-    Ok([make(VARIANTS[0])?, make(VARIANTS[1])?, make(VARIANTS[2])?])
+    Ok([
+        [make(0, VARIANTS[0])?, make(0, VARIANTS[1])?, make(0, VARIANTS[2])?],
+        [make(1, VARIANTS[0])?, make(1, VARIANTS[1])?, make(1, VARIANTS[2])?],
+    ])
 }
 
 /// One draw: a range of the merged index buffer, its material and its textures (indices into
@@ -159,31 +175,39 @@ pub struct Targets {
     albedo: Image,
     /// Reversed-Z depth (`f32`), one word per pixel.
     pub depth_buf: Buffer,
-    /// Octahedral view-space normal, one word per pixel.
+    /// View-space normal: one word per pixel (octahedral) or four (float32).
     pub normal_buf: Buffer,
+    /// Index into [`NORMAL_FORMATS`].
+    pub normal_target: usize,
     /// RGBA8 albedo + material index, one word per pixel.
     pub albedo_buf: Buffer,
 }
 
 impl Targets {
-    pub fn new(ctx: &Context, width: u32, height: u32) -> VkResult<Self> {
+    /// Targets for `width × height` pixels and normals at `precision` (`PRECISION_*`).
+    pub fn new(ctx: &Context, width: u32, height: u32, precision: u32) -> VkResult<Self> {
         let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
         let n = width as u64 * height as u64;
+        let normal_target = normal_target(precision);
+        let normal_words = Precision::from_u32(precision).gbuffer_words() as u64;
         crate::vk::memory::check_range(ctx, "G-buffer", 4 * n)?;
+        crate::vk::memory::check_range(ctx, "G-buffer normals", 4 * normal_words * n)?;
         Ok(Self {
             width,
             height,
             depth: Image::new_2d(ctx, "gbuffer depth", width, height, DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC)?,
-            normal: Image::new_2d(ctx, "gbuffer normal", width, height, NORMAL_FORMAT, color)?,
+            normal: Image::new_2d(ctx, "gbuffer normal", width, height, NORMAL_FORMATS[normal_target], color)?,
             albedo: Image::new_2d(ctx, "gbuffer albedo", width, height, ALBEDO_FORMAT, color)?,
             depth_buf: Buffer::storage(ctx, "gbuffer depth", 4 * n)?,
-            normal_buf: Buffer::storage(ctx, "gbuffer normals", 4 * n)?,
+            normal_buf: Buffer::storage(ctx, "gbuffer normals", 4 * normal_words * n)?,
+            normal_target,
             albedo_buf: Buffer::storage(ctx, "gbuffer albedo", 4 * n)?,
         })
     }
 
     pub fn bytes(&self) -> u64 {
-        self.depth_buf.size + self.normal_buf.size + self.albedo_buf.size + 12 * self.width as u64 * self.height as u64
+        // The targets hold what their buffers hold.
+        2 * (self.depth_buf.size + self.normal_buf.size + self.albedo_buf.size)
     }
 }
 
@@ -237,7 +261,7 @@ pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Text
     let mut bound = usize::MAX;
     for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
         let variant = draw.variant();
-        let pipe = &gpu.gbuffer[variant];
+        let pipe = &gpu.gbuffer[t.normal_target][variant];
         let images = [textures.info(draw.albedo_texture), textures.info(draw.mask_texture)];
         let mut writes: Vec<_> = infos
             .iter()

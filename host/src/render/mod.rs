@@ -107,8 +107,8 @@ pub struct Settings {
 pub struct Readback {
     /// Reversed-Z depth bits per pixel.
     pub depth: Vec<u32>,
-    /// Encoded G-buffer normal per pixel (`Settings::normal_precision`).
-    pub normals: Vec<u32>,
+    /// Decoded G-buffer normal per pixel (as the shading passes read it).
+    pub normals: Vec<[f32; 3]>,
     pub keys: Vec<u32>,
     pub unique: Vec<u32>,
     pub counts: Vec<u32>,
@@ -176,6 +176,13 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
         bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
     }
+    if let Some(d) = scene.draws.iter().find(|d| d.params.normal_precision != s.normal_precision) {
+        bail!(
+            "a draw encodes normals at precision {} but the frame reads them at {}: flatten the scene at the frame's precision",
+            d.params.normal_precision,
+            s.normal_precision
+        );
+    }
     let ctx = &gpu.ctx;
     let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
     if ctx.info.driver_name.to_lowercase().contains("llvmpipe") && scene.lights.len() > max_lights as usize {
@@ -189,7 +196,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
         .context("uploading geometry")?;
     let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
-    let targets = gbuffer::Targets::new(ctx, s.width, s.height).context("allocating the G-buffer")?;
+    let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision).context("allocating the G-buffer")?;
     let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
     let lights_view = lights_to_view(scene.view, scene.lights);
     let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
@@ -325,8 +332,13 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let readback = if s.read_back {
         let mut depth = targets.depth_buf;
         let gbuffer: Vec<u32> = depth.read(n as usize)?;
+        let precision = shaders::octahedral::Precision::from_u32(s.normal_precision);
         let mut normal_buf = targets.normal_buf;
-        let normals: Vec<u32> = normal_buf.read(n as usize)?;
+        let words: Vec<u32> = normal_buf.read((precision.gbuffer_words() * n) as usize)?;
+        let normals = words
+            .chunks(precision.gbuffer_words() as usize)
+            .map(|w| shaders::octahedral::decode([w[0], w.get(1).copied().unwrap_or(0), w.get(2).copied().unwrap_or(0)], precision))
+            .collect();
         let mut rb = match cluster.as_mut() {
             Some(cb) => cb.read_back(gbuffer, unique_clusters, light_refs, lights_view.clone(), grid, bounds.clone())?,
             None => Readback { depth: gbuffer, normals: vec![], keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![], lights_view, grid, bounds },
