@@ -1,6 +1,7 @@
 //! `manylights bench`: every technique side by side, measured the same way.
 //!
 //! Steps:
+//! 0. Warm the GPU up: every technique in turn for [`WARM_UP_SECONDS`], unrecorded (clocks).
 //! 1. For each scene × resolution × light count × technique (the sweep), generate the lights
 //!    (seeded, uniform in the scene), render one warm-up frame and `--frames` timed frames, and
 //!    keep each pass's GPU-timestamp median, min and max, the bytes of every buffer and the
@@ -44,6 +45,9 @@ pub const CSV_COLUMNS: [&str; 14] = [
     "scene", "technique", "width", "height", "lights", "frames", "stage", "median_ms", "min_ms", "max_ms", "bytes", "light_lists",
     "lights_per_list_mean", "lights_per_list_max",
 ];
+
+/// Seconds every sweep spends warming the GPU up before its first recorded configuration.
+pub const WARM_UP_SECONDS: f64 = 10.0;
 
 #[derive(Args, Debug, Clone)]
 pub struct BenchArgs {
@@ -225,15 +229,23 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut out = Results { device: gpu.ctx.info.line(), command, ..Default::default() };
-    // Warm-up: a GPU idle before the sweep starts at low clocks, which one warm-up frame per
-    // configuration does not undo for the first ones. Render the first configuration for 2 s, unrecorded.
-    if let (Some(name), Some(&n), Some(&t)) = (a.scenes.first(), a.lights.first(), techniques.first()) {
+    // Warm-up: a GPU idle before the sweep starts at low clocks and ramps up over seconds; one
+    // warm-up frame per configuration does not undo that for the first configurations. On a cold
+    // H100, 2 s of deferred frames left Forward+'s first configuration (raster-bound) 2× slow,
+    // and 1 s per technique still 1.3×. So the techniques take turns on the first scene and light
+    // count for 10 s, unrecorded (not on lavapipe, whose times are not quoted anyway).
+    let warm_up_seconds = if cpu_driver { 0.0 } else { WARM_UP_SECONDS };
+    if let (Some(name), Some(&n)) = (a.scenes.first(), a.lights.first()) {
         let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
         let warm = BenchArgs { frames: a.frames.max(10), ..a.clone() };
+        let runnable: Vec<Technique> =
+            techniques.iter().copied().filter(|&t| skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver).is_none()).collect();
         let start = std::time::Instant::now();
-        while skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver).is_none() && start.elapsed().as_secs_f64() < 2.0 {
-            if run_config(gpu, &scene, name, t, n, &warm).is_err() {
-                break; // the sweep records the error where it belongs
+        'warm: while !runnable.is_empty() && start.elapsed().as_secs_f64() < warm_up_seconds {
+            for &t in &runnable {
+                if run_config(gpu, &scene, name, t, n, &warm).is_err() {
+                    break 'warm; // the sweep records the error where it belongs
+                }
             }
         }
     }
