@@ -12,27 +12,7 @@ use host::gpu::Gpu;
 use host::render::sort::{LightSorter, SortKind};
 use host::vk::Buffer;
 use shaders::bitonic::{block_elems, sample_stride, SPLITTER_KEEP};
-
-fn inputs(n: usize, seed: u32) -> Vec<(&'static str, Vec<u32>)> {
-    let mut x = seed | 1;
-    let mut rnd = move || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        x
-    };
-    let mut random: Vec<u32> = (0..n).map(|_| rnd()).collect();
-    if n > 2 {
-        random[n / 2] = u32::MAX; // a real key equal to the bitonic sort's padding key
-    }
-    vec![
-        ("all equal", vec![0xdead_beef; n]),
-        ("sorted", (0..n as u32).map(|i| i.wrapping_mul(3)).collect()),
-        ("reverse", (0..n as u32).rev().collect()),
-        ("few distinct", (0..n).map(|_| rnd() % 4).collect()),
-        ("random", random),
-    ]
-}
+use shaders::sort_inputs::shapes as inputs;
 
 fn check(gpu: &Gpu, sorter: &LightSorter, keys: &[u32], what: &str) {
     let n = keys.len();

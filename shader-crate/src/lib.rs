@@ -69,6 +69,8 @@ pub mod reconstruct;
 pub mod scan;
 #[cfg(test)]
 mod sort_acceptance_tests;
+#[cfg(not(target_arch = "spirv"))]
+pub mod sort_inputs;
 #[cfg(feature = "compute")]
 pub mod tiled;
 

@@ -15,35 +15,10 @@
 //! The same lengths and shapes run on the GPU (lavapipe, and the H100) in `tests/sort.rs`.
 use crate::bitonic::{block_elems, emulated::sort_emulated as bitonic_sort, sample_stride, SPLITTER_KEEP};
 use crate::radix::{sort_emulated as radix_sort, RADIX_TILE};
+pub use crate::sort_inputs::shapes as inputs;
 
 /// A million and seventeen: the acceptance's 2^20 + 17.
 const MILLION: usize = 1 << 20;
-
-fn xorshift(seed: u32) -> impl FnMut() -> u32 {
-    let mut x = seed | 1;
-    move || {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        x
-    }
-}
-
-/// The five input shapes (`0xFFFF_FFFF` among the random keys: a real key equal to the pads').
-pub fn inputs(n: usize, seed: u32) -> Vec<(&'static str, Vec<u32>)> {
-    let mut rnd = xorshift(seed);
-    let mut random: Vec<u32> = (0..n).map(|_| rnd()).collect();
-    if n > 2 {
-        random[n / 2] = u32::MAX;
-    }
-    vec![
-        ("all equal", vec![0xdead_beef; n]),
-        ("sorted", (0..n as u32).map(|i| i.wrapping_mul(3)).collect()),
-        ("reverse", (0..n as u32).rev().collect()),
-        ("few distinct", (0..n).map(|_| rnd() % 4).collect()),
-        ("random", random),
-    ]
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Sorter {
