@@ -66,7 +66,7 @@ fn distributions(scene: &Scene, n: usize) -> [(&'static str, Vec<PointLight>); 2
 fn bvh(c: &mut Criterion) {
     let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device");
     eprintln!("device: {}", gpu.ctx.info.line());
-    let llvmpipe = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let llvmpipe = gpu.ctx.info.is_llvmpipe();
     let scene = Scene::load("city", std::path::Path::new(".")).expect("city");
     let flat = flatten(&scene, PRECISION_OCT16).expect("flatten");
     let mut g = c.benchmark_group("light assignment (city 1280x720)");

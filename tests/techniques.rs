@@ -189,7 +189,7 @@ fn seventy_thousand_lights_all_visited() {
     let gpu = common::gpu();
     let scene = city();
     let l = lights::uniform(&scene, 70_000, 13).unwrap();
-    let llvmpipe = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let llvmpipe = gpu.ctx.info.is_llvmpipe();
     let techniques: Vec<Technique> = TECHNIQUES.iter().copied().filter(|&t| !(llvmpipe && t == Technique::ForwardPlus)).collect();
     assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &techniques);
     if llvmpipe {

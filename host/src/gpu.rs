@@ -1,7 +1,8 @@
 //! The GPU as the algorithms see it: a Vulkan context plus one typed pipeline per kernel of the
-//! compute module that `build.rs` compiled from `shader-crate` (embedded in the binary).
-use crate::vk::{ComputePipeline, Context, ContextOptions, Profiler, Recorder, ShaderModule, VkResult};
-use shaders::kernels;
+//! compute module and per raster pass of the raster module that `build.rs` compiled from
+//! `shader-crate` (both embedded in the binary), all built once when the device opens.
+use crate::vk::{ComputePipeline, Context, ContextOptions, DepthTest, GraphicsPipeline, Profiler, Recorder, ShaderModule, TargetFormat, VkResult};
+use shaders::kernels::{self, RasterKernel};
 use shaders::layout::*;
 
 /// The compute SPIR-V module (rust-gpu output), embedded at build time.
@@ -99,20 +100,67 @@ impl Kernels {
     }
 }
 
+/// The raster SPIR-V module (rust-gpu output of the `graphics` feature), embedded at build time.
+pub const GRAPHICS_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_GRAPHICS_SPV"));
+
+/// G-buffer normal target formats: `[octahedral (one word), float32 (four words)]`.
+pub const NORMAL_FORMATS: [TargetFormat; 2] = [TargetFormat::R32Uint, TargetFormat::Rgba32Uint];
+/// G-buffer albedo (RGBA8, alpha = material index).
+pub const ALBEDO_FORMAT: TargetFormat = TargetFormat::Rgba8Unorm;
+/// Forward+'s colour targets: the frame's packed RGBA8 word, and each pixel's winning draw.
+pub const FORWARD_COLOUR_FORMAT: TargetFormat = TargetFormat::R32Uint;
+
+/// Index into [`NORMAL_FORMATS`] (and the outer index of [`RasterPipelines::gbuffer`]) for a
+/// normal precision (`PRECISION_*`).
+pub fn normal_target(precision: u32) -> usize {
+    usize::from(shaders::octahedral::Precision::from_u32(precision).gbuffer_words() == 4)
+}
+
+/// Pipelines of every raster pass, built once with the device.
+pub struct RasterPipelines {
+    /// G-buffer `[normal target][variant]` ([`normal_target`]; variants of `kernels::GBUFFER`).
+    pub gbuffer: [[GraphicsPipeline<DrawParams>; 3]; 2],
+    /// Forward+ depth pre-pass `[opaque, alpha-tested]`.
+    pub forward_depth: [GraphicsPipeline<ForwardParams>; 2],
+    /// Forward+ shading `[plain, textured, alpha-tested]`.
+    pub forward_shade: [GraphicsPipeline<ForwardParams>; 3],
+}
+
+impl RasterPipelines {
+    pub fn new(ctx: &Context) -> VkResult<Self> {
+        let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
+        let gbuffer = |target: usize, handles: &[RasterKernel<DrawParams>; 3]| -> VkResult<[GraphicsPipeline<DrawParams>; 3]> {
+            let colours = [NORMAL_FORMATS[target], ALBEDO_FORMAT];
+            let make = |h: RasterKernel<DrawParams>| GraphicsPipeline::new(ctx, &module, h.fragment, h, &colours, DepthTest::NearestWrites);
+            Ok([make(handles[0])?, make(handles[1])?, make(handles[2])?])
+        };
+        let colour = [FORWARD_COLOUR_FORMAT];
+        let forward = |h: RasterKernel<ForwardParams>, depth| GraphicsPipeline::new(ctx, &module, h.fragment, h, &colour, depth);
+        let (d, s) = (&kernels::FORWARD_DEPTH, &kernels::FORWARD_SHADE);
+        Ok(Self {
+            gbuffer: [gbuffer(0, &kernels::GBUFFER)?, gbuffer(1, &kernels::GBUFFER_F32)?],
+            forward_depth: [forward(d[0], DepthTest::NearestWrites)?, forward(d[1], DepthTest::NearestWrites)?],
+            forward_shade: [
+                forward(s[0], DepthTest::EqualReadOnly)?,
+                forward(s[1], DepthTest::EqualReadOnly)?,
+                forward(s[2], DepthTest::EqualReadOnly)?,
+            ],
+        })
+    }
+}
+
 pub struct Gpu {
     pub kernels: Kernels,
-    /// The G-buffer raster pipelines (graphics module): `[normal target][variant]`
-    /// (`render::gbuffer::normal_target`, `render::gbuffer::VARIANTS`).
-    pub gbuffer: [[crate::vk::GraphicsPipeline; 3]; 2],
+    pub raster: RasterPipelines,
     pub ctx: Context,
 }
 
 impl Gpu {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
         let ctx = Context::new(opts)?;
-        let made = Kernels::new(&ctx).and_then(|k| Ok((k, crate::render::gbuffer::pipelines(&ctx)?)));
+        let made = Kernels::new(&ctx).and_then(|k| Ok((k, RasterPipelines::new(&ctx)?)));
         match made {
-            Ok((kernels, gbuffer)) => Ok(Self { kernels, gbuffer, ctx }),
+            Ok((kernels, raster)) => Ok(Self { kernels, raster, ctx }),
             // Name what the validation layer saw, not just the failed call.
             Err(e) => match ctx.take_validation_messages() {
                 m if m.is_empty() => Err(e),
@@ -121,11 +169,7 @@ impl Gpu {
         }
     }
 
-    /// Records `on_async` for the async-compute queue and `on_main` for the graphics queue, which
-    /// waits for it before its first compute shader (its raster passes overlap the async work);
-    /// waits for both. Passes of `on_async` are timed by `async_profiler`. Without an async-compute
-    /// queue (or with `overlap` false) both go into one command buffer, `on_async` first, timed by
-    /// `profiler`.
+    /// [`Context::run_overlapped`] on this GPU's context.
     pub fn run_overlapped<A, B>(
         &self,
         overlap: bool,
@@ -134,39 +178,11 @@ impl Gpu {
         on_async: impl FnOnce(&mut Recorder<'_>) -> VkResult<A>,
         on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
     ) -> VkResult<(A, B)> {
-        if !overlap || self.ctx.async_compute_queue.is_none() {
-            return self.run(profiler, |rec| {
-                let a = on_async(rec)?;
-                Ok((a, on_main(rec)?))
-            });
-        }
-        let stage = ash::vk::PipelineStageFlags::COMPUTE_SHADER;
-        self.ctx
-            .submit_overlapped_and_wait(
-                |cmd| on_async(&mut self.recorder(async_profiler, cmd)),
-                |cmd| on_main(&mut self.recorder(profiler, cmd)),
-                stage,
-            )
-            .expect("an async-compute queue (checked above)")
-    }
-
-    /// A recorder over `cmd`; resets the profiler's queries first.
-    fn recorder<'a>(&'a self, mut profiler: Option<&'a mut Profiler>, cmd: ash::vk::CommandBuffer) -> Recorder<'a> {
-        if let Some(p) = profiler.as_deref_mut() {
-            p.reset(cmd);
-        }
-        Recorder { ctx: &self.ctx, cmd, profiler }
+        self.ctx.run_overlapped(overlap, profiler, async_profiler, on_async, on_main)
     }
 
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.
     pub fn run<R>(&self, profiler: Option<&mut Profiler>, f: impl FnOnce(&mut Recorder<'_>) -> VkResult<R>) -> VkResult<R> {
-        self.ctx.submit_and_wait(|cmd| {
-            let mut profiler = profiler;
-            if let Some(p) = profiler.as_deref_mut() {
-                p.reset(cmd);
-            }
-            let mut rec = Recorder { ctx: &self.ctx, cmd, profiler };
-            f(&mut rec)
-        })
+        self.ctx.run(profiler, f)
     }
 }

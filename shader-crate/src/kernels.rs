@@ -97,3 +97,65 @@ pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_splitters", 2, [crate::bitonic::SPLITTER_WORKGROUP, 1, 1], false);
 pub const BITONIC_MERGE: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_merge", 5, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
+
+/// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds
+/// `vertex_storage_buffers` storage buffers read by the vertex stage, then
+/// `fragment_storage_buffers` read by the fragment stage, then `fragment_samplers` combined image
+/// samplers; the fragment stage's push constants are a `P`.
+pub struct RasterKernel<P> {
+    pub vertex: &'static str,
+    pub fragment: &'static str,
+    pub vertex_storage_buffers: u32,
+    pub fragment_storage_buffers: u32,
+    pub fragment_samplers: u32,
+    _params: PhantomData<fn() -> P>,
+}
+
+impl<P> RasterKernel<P> {
+    const fn new(vertex: &'static str, fragment: &'static str, fragment_storage_buffers: u32, fragment_samplers: u32) -> Self {
+        Self { vertex, fragment, vertex_storage_buffers: RASTER_VERTEX_BUFFERS, fragment_storage_buffers, fragment_samplers, _params: PhantomData }
+    }
+
+    /// Bindings of set 0, every stage.
+    pub const fn bindings(&self) -> u32 {
+        self.vertex_storage_buffers + self.fragment_storage_buffers + self.fragment_samplers
+    }
+}
+
+impl<P> Clone for RasterKernel<P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<P> Copy for RasterKernel<P> {}
+
+/// Storage buffers of every raster vertex stage: positions, normals, uvs, camera.
+pub const RASTER_VERTEX_BUFFERS: u32 = 4;
+
+/// G-buffer variants by what a draw's material needs (`[plain, textured, alpha-tested]`; the
+/// samplers: none, albedo, albedo + mask), writing octahedral normals (one word per pixel).
+pub const GBUFFER: [RasterKernel<DrawParams>; 3] = [
+    RasterKernel::new("raster::gbuffer_vs", "raster::gbuffer_fs", 0, 0),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured", 0, 1),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked", 0, 2),
+];
+/// [`GBUFFER`] writing float32 normals (four words per pixel).
+pub const GBUFFER_F32: [RasterKernel<DrawParams>; 3] = [
+    RasterKernel::new("raster::gbuffer_vs", "raster::gbuffer_fs_f32", 0, 0),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured_f32", 0, 1),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked_f32", 0, 2),
+];
+/// Forward+ depth pre-pass `[opaque, alpha-tested]`: writes each pixel's winning draw.
+pub const FORWARD_DEPTH: [RasterKernel<ForwardParams>; 2] = [
+    RasterKernel::new("raster_forward::depth_vs", "raster_forward::depth_fs", 0, 0),
+    RasterKernel::new("raster_forward::depth_vs_uv", "raster_forward::depth_fs_masked", 0, 2),
+];
+/// Storage buffers of the forward pass's fragment stage: tile heads, nodes, lights, materials,
+/// counters, winning draws.
+pub const FORWARD_FRAGMENT_BUFFERS: u32 = 6;
+/// Forward+ shading pass `[plain, textured, alpha-tested]` (as [`GBUFFER`]).
+pub const FORWARD_SHADE: [RasterKernel<ForwardParams>; 3] = [
+    RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs", FORWARD_FRAGMENT_BUFFERS, 0),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured", FORWARD_FRAGMENT_BUFFERS, 1),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked", FORWARD_FRAGMENT_BUFFERS, 2),
+];

@@ -114,7 +114,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
     let (mut frame, mut compute) = (0.0, 0.0);
     for t in main {
         frame += t.ms;
-        if !super::is_raster_pass(Technique::ClusteredBvh, &t.name) {
+        if !t.raster {
             compute += t.ms;
         }
     }

@@ -17,8 +17,8 @@
 //!    breakdown, the skips.
 //!
 //! The "frame" stage is the sum of the main queue's passes (async-compute passes that overlap
-//! the raster are not added: [`crate::render::ASYNC_PASSES`]); "compute" is the frame without
-//! its raster passes ([`is_raster_pass`]), because a GPU may give raster work only part of the
+//! the raster are not added: [`crate::render::Frame::on_main_queue`]); "compute" is the frame without
+//! its raster passes ([`crate::render::Frame::is_raster`]), because a GPU may give raster work only part of the
 //! chip (the H100 runs it on 2 of its TPCs) — both are reported.
 pub mod accuracy;
 pub mod plots;
@@ -33,12 +33,6 @@ use clap::{Args, ValueEnum};
 use shaders::layout::{PRECISION_OCT16, VIEW_SHADED};
 use std::io::Write as _;
 use std::path::PathBuf;
-
-/// Passes that run on the raster pipeline: the G-buffer of the deferred techniques, and the depth
-/// pre-pass and forward shading pass of `forward-plus`.
-pub fn is_raster_pass(t: Technique, stage: &str) -> bool {
-    stage == "gbuffer" || (t == Technique::ForwardPlus && (stage == "depth pre-pass" || stage == "shading"))
-}
 
 /// Columns of `results.csv`.
 pub const CSV_COLUMNS: [&str; 14] = [
@@ -207,7 +201,7 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
     let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
     let on_main = |p: &&Row| frame.on_main_queue(&p.stage);
     let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
-        rows.iter().filter(on_main).filter(|p| raster || !is_raster_pass(t, &p.stage)).map(f).sum()
+        rows.iter().filter(on_main).filter(|p| raster || !frame.is_raster(&p.stage)).map(f).sum()
     };
     // Sums of medians (the per-frame sums were not kept): min and max sum the passes' extremes.
     let frame_row = row("frame", sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
@@ -223,7 +217,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
     ensure!(!a.lights.is_empty() && a.lights.iter().all(|&n| n > 0), "--lights needs positive light counts");
     ensure!(!a.scenes.is_empty(), "--scenes is empty");
     ensure!(a.frames > 0, "--frames must be at least 1");
-    let cpu_driver = gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe");
+    let cpu_driver = gpu.ctx.info.is_llvmpipe();
     let total = (a.scenes.len() * a.lights.len() * techniques.len()) as u64;
     let bar = indicatif::ProgressBar::new(total).with_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -312,7 +306,7 @@ pub fn present_techniques(rows: &[&Row]) -> Vec<Technique> {
 
 /// The technique's command-line name (`clustered-bvh`).
 pub fn technique_name(t: Technique) -> String {
-    t.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_else(|| format!("{t:?}"))
+    t.name().to_string()
 }
 
 /// `manylights bench`: sweep, CSV, plots, markdown.

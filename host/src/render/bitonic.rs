@@ -11,7 +11,7 @@
 //!
 //! Memory (scratch): 8 B per element (keys + values) and 8 B per piece of boundaries, sized for
 //! the largest level at `capacity` (≈ n/16 B at W = 8, n/64 B at W = 32).
-use super::scan::fold;
+use crate::vk::fold;
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use shaders::bitonic::{block_elems, level, level_count, Level, SPLITTER_WORKGROUP};

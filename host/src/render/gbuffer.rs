@@ -7,64 +7,11 @@
 //! normals, four (`R32G32B32A32_UINT`: three bit patterns and a pad; the `_f32` fragment
 //! variants write it). Memory: targets 4 + 4 (16) + 4 B/px, plus the same again as buffers:
 //! 24 MB at 1080p in all, 49 MB with float32 normals.
-use crate::gpu::Gpu;
+use crate::gpu::{normal_target, Gpu, ALBEDO_FORMAT, NORMAL_FORMATS};
 use crate::vk::image::upload_rgba8;
-use crate::vk::{Buffer, Context, GraphicsPipeline, Image, RasterDesc, Recorder, Sampler, ShaderModule, VkResult};
-use ash::vk;
+use crate::vk::{Attachment, Binding, Buffer, Context, Image, ImageUse, Load, Recorder, Sampler, TargetFormat, VkResult};
 use shaders::layout::{DrawParams, RasterCamera};
 use shaders::octahedral::Precision;
-
-/// Normal target formats: `[octahedral, float32]`.
-pub const NORMAL_FORMATS: [vk::Format; 2] = [vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT];
-pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-
-/// The raster module (rust-gpu output of the `graphics` feature), embedded at build time.
-pub const GRAPHICS_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_GRAPHICS_SPV"));
-
-/// G-buffer pipeline variants, by what a draw's material needs: `(name, vertex, fragment,
-/// combined image samplers)`. A scene without textures binds and samples none. Each fragment
-/// entry has a float32-normal twin named `<entry>_f32`.
-pub const VARIANTS: [(&str, &str, &str, u32); 3] = [
-    ("gbuffer", "raster::gbuffer_vs", "raster::gbuffer_fs", 0),
-    ("gbuffer textured", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured", 1),
-    ("gbuffer alpha-tested", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked", 2),
-];
-
-/// Index into [`NORMAL_FORMATS`] and the outer index of [`pipelines`] for a `PRECISION_*`.
-pub fn normal_target(precision: u32) -> usize {
-    usize::from(Precision::from_u32(precision).gbuffer_words() == 4)
-}
-
-/// The G-buffer pipelines: `[normal target][variant]` (see [`normal_target`], [`VARIANTS`]).
-pub fn pipelines(ctx: &Context) -> VkResult<[[GraphicsPipeline; 3]; 2]> {
-    let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
-    let make = |target: usize, (name, vertex_entry, fragment, fragment_samplers): (&str, &str, &str, u32)| {
-        let fragment_f32 = format!("{fragment}_f32");
-        let (name, fragment_entry) = if target == 1 { (format!("{name} (float32 normals)"), fragment_f32.as_str()) } else { (name.to_string(), fragment) };
-        GraphicsPipeline::new(
-            ctx,
-            &module,
-            &RasterDesc {
-                name: &name,
-                vertex_entry,
-                fragment_entry,
-                vertex_storage_buffers: 4,
-                fragment_storage_buffers: 0,
-                fragment_samplers,
-                push_constant_bytes: std::mem::size_of::<DrawParams>() as u32,
-                color_formats: &[NORMAL_FORMATS[target], ALBEDO_FORMAT],
-                depth_format: DEPTH_FORMAT,
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
-            },
-        )
-    };
-    Ok([
-        [make(0, VARIANTS[0])?, make(0, VARIANTS[1])?, make(0, VARIANTS[2])?],
-        [make(1, VARIANTS[0])?, make(1, VARIANTS[1])?, make(1, VARIANTS[2])?],
-    ])
-}
 
 /// One draw: a range of the merged index buffer, its material and its textures (indices into
 /// the scene's texture list).
@@ -78,7 +25,8 @@ pub struct Draw {
 }
 
 impl Draw {
-    /// Index into [`VARIANTS`].
+    /// Index into the raster handles' variants (`shaders::kernels::GBUFFER`): plain, textured,
+    /// alpha-tested.
     pub fn variant(&self) -> usize {
         match (self.albedo_texture, self.mask_texture) {
             (_, Some(_)) => 2,
@@ -111,20 +59,21 @@ impl Textures {
             .iter()
             .enumerate()
             .map(|(i, t)| {
-                let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
-                upload_rgba8(ctx, &format!("texture {i}"), t.width, t.height, format, t.rgba8)
+                upload_rgba8(ctx, &format!("texture {i}"), t.width, t.height, t.srgb, t.rgba8)
             })
             .collect::<VkResult<Vec<_>>>()?;
-        let white = upload_rgba8(ctx, "white texture", 1, 1, vk::Format::R8G8B8A8_UNORM, &[255; 4])?;
+        let white = upload_rgba8(ctx, "white texture", 1, 1, false, &[255; 4])?;
         Ok(Self { images, white, sampler: Sampler::linear_repeat(ctx)? })
     }
 
-    pub fn info(&self, index: Option<u32>) -> [vk::DescriptorImageInfo; 1] {
-        let img = index.and_then(|i| self.images.get(i as usize)).unwrap_or(&self.white);
-        [vk::DescriptorImageInfo::default()
-            .sampler(self.sampler.raw)
-            .image_view(img.view)
-            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+    /// The binding of texture `index` (the white texture for none).
+    pub fn binding(&self, index: Option<u32>) -> Binding<'_> {
+        Binding::Texture(index.and_then(|i| self.images.get(i as usize)).unwrap_or(&self.white), &self.sampler)
+    }
+
+    /// The bindings of a draw of `variant` (0: none; 1: albedo; 2: albedo and mask).
+    pub fn bindings_of<'a>(&'a self, draw: &Draw, variant: usize) -> impl Iterator<Item = Binding<'a>> {
+        [self.binding(draw.albedo_texture), self.binding(draw.mask_texture)].into_iter().take(variant)
     }
 
     pub fn bytes(&self) -> u64 {
@@ -143,26 +92,22 @@ pub struct Geometry {
 
 impl Geometry {
     pub fn upload(ctx: &Context, positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u32], draws: Vec<Draw>) -> VkResult<Self> {
-        let idx = Buffer::new(
-            ctx,
-            "indices",
-            4 * indices.len() as u64,
-            crate::vk::memory::STORAGE | vk::BufferUsageFlags::INDEX_BUFFER,
-            crate::vk::MemoryLocation::GpuOnly,
-        );
-        let mut idx = idx?;
-        idx.write(indices)?;
         Ok(Self {
             positions: Buffer::from_slice(ctx, "positions", positions)?,
             normals: Buffer::from_slice(ctx, "normals", normals)?,
             uvs: Buffer::from_slice(ctx, "uvs", uvs)?,
-            indices: idx,
+            indices: Buffer::indices(ctx, "indices", indices)?,
             draws,
         })
     }
 
     pub fn bytes(&self) -> u64 {
         self.positions.size + self.normals.size + self.uvs.size + self.indices.size
+    }
+
+    /// The vertex stage's storage buffers of every raster pass: positions, normals, uvs, camera.
+    pub fn vertex_bindings<'a>(&'a self, camera: &'a Buffer) -> impl Iterator<Item = Binding<'a>> {
+        [&self.positions, &self.normals, &self.uvs, camera].into_iter().map(Binding::Buffer)
     }
 }
 
@@ -186,7 +131,6 @@ pub struct Targets {
 impl Targets {
     /// Targets for `width × height` pixels and normals at `precision` (`PRECISION_*`).
     pub fn new(ctx: &Context, width: u32, height: u32, precision: u32) -> VkResult<Self> {
-        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
         let n = width as u64 * height as u64;
         let normal_target = normal_target(precision);
         let normal_words = Precision::from_u32(precision).gbuffer_words() as u64;
@@ -195,9 +139,9 @@ impl Targets {
         Ok(Self {
             width,
             height,
-            depth: Image::new_2d(ctx, "gbuffer depth", width, height, DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC)?,
-            normal: Image::new_2d(ctx, "gbuffer normal", width, height, NORMAL_FORMATS[normal_target], color)?,
-            albedo: Image::new_2d(ctx, "gbuffer albedo", width, height, ALBEDO_FORMAT, color)?,
+            depth: Image::target(ctx, "gbuffer depth", width, height, TargetFormat::Depth32)?,
+            normal: Image::target(ctx, "gbuffer normal", width, height, NORMAL_FORMATS[normal_target])?,
+            albedo: Image::target(ctx, "gbuffer albedo", width, height, ALBEDO_FORMAT)?,
             depth_buf: Buffer::storage(ctx, "gbuffer depth", 4 * n)?,
             normal_buf: Buffer::storage(ctx, "gbuffer normals", 4 * normal_words * n)?,
             normal_target,
@@ -213,89 +157,26 @@ impl Targets {
 
 /// Records the G-buffer pass and the copies into the targets' buffers.
 pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Textures, camera: &Buffer, t: &Targets) -> VkResult<()> {
-    let d = &gpu.ctx.device;
-    let cmd = rec.cmd;
-    let color_out = (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
-    let depth_out = (
-        vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
-        vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
-    );
-    let top = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
-    let transfer_read = (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ);
     for img in [&t.normal, &t.albedo] {
-        img.transition(cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, top.0, top.1, color_out.0, color_out.1);
+        rec.transition(img, ImageUse::Undefined, ImageUse::ColourTarget);
     }
-    t.depth.transition(cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, top.0, top.1, depth_out.0, depth_out.1);
-    let clear = |c: vk::ClearColorValue| vk::ClearValue { color: c };
-    let colors = [
-        vk::RenderingAttachmentInfo::default()
-            .image_view(t.normal.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(clear(vk::ClearColorValue { uint32: [0; 4] })),
-        vk::RenderingAttachmentInfo::default()
-            .image_view(t.albedo.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(clear(vk::ClearColorValue { float32: [0.0; 4] })),
+    rec.transition(&t.depth, ImageUse::Undefined, ImageUse::DepthTarget);
+    let colours = [
+        Attachment { image: &t.normal, load: Load::ClearU32([0; 4]) },
+        Attachment { image: &t.albedo, load: Load::ClearF32([0.0; 4]) },
     ];
-    let depth = vk::RenderingAttachmentInfo::default()
-        .image_view(t.depth.view)
-        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(vk::AttachmentStoreOp::STORE)
-        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
-    let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: t.width, height: t.height } };
-    let info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&colors).depth_attachment(&depth);
-    let buffers = [&geo.positions, &geo.normals, &geo.uvs, camera];
-    let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-        buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
-    unsafe {
-        d.cmd_begin_rendering(cmd, &info);
-        d.cmd_set_viewport(cmd, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: t.width as f32, height: t.height as f32, min_depth: 0.0, max_depth: 1.0 }]);
-        d.cmd_set_scissor(cmd, 0, &[area]);
-        d.cmd_bind_index_buffer(cmd, geo.indices.raw, 0, vk::IndexType::UINT32);
-    }
-    let mut bound = usize::MAX;
+    rec.begin_rendering(&colours, Attachment { image: &t.depth, load: Load::ClearDepth(0.0) }, &geo.indices);
     for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
         let variant = draw.variant();
-        let pipe = &gpu.gbuffer[t.normal_target][variant];
-        let images = [textures.info(draw.albedo_texture), textures.info(draw.mask_texture)];
-        let mut writes: Vec<_> = infos
-            .iter()
-            .enumerate()
-            .map(|(i, info)| vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info))
-            .collect();
-        writes.extend(images.iter().take(VARIANTS[variant].3 as usize).enumerate().map(|(s, info)| {
-            vk::WriteDescriptorSet::default()
-                .dst_binding(4 + s as u32)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .image_info(info)
-        }));
-        unsafe {
-            if bound != variant {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.raw);
-                bound = variant;
-            }
-            gpu.ctx.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, pipe.layout, 0, &writes);
-            d.cmd_push_constants(cmd, pipe.layout, vk::ShaderStageFlags::FRAGMENT, 0, bytemuck::bytes_of(&draw.params));
-            d.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
-        }
+        let bindings: Vec<Binding<'_>> = geo.vertex_bindings(camera).chain(textures.bindings_of(draw, variant)).collect();
+        rec.draw_indexed(&gpu.raster.gbuffer[t.normal_target][variant], &bindings, &draw.params, draw.first_index, draw.index_count)?;
     }
-    unsafe { d.cmd_end_rendering(cmd) };
+    rec.end_rendering();
     for img in [&t.normal, &t.albedo] {
-        img.transition(cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, color_out.0, color_out.1, transfer_read.0, transfer_read.1);
+        rec.transition(img, ImageUse::ColourTarget, ImageUse::CopySource);
     }
-    t.depth.transition(cmd, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, depth_out.0, depth_out.1, transfer_read.0, transfer_read.1);
-    for (img, buf) in [(&t.depth, &t.depth_buf), (&t.normal, &t.normal_buf), (&t.albedo, &t.albedo_buf)] {
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(img.aspect()).layer_count(1))
-            .image_extent(vk::Extent3D { width: t.width, height: t.height, depth: 1 });
-        unsafe { d.cmd_copy_image_to_buffer(cmd, img.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region]) };
-    }
-    crate::vk::memory::barrier(&gpu.ctx, cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+    rec.transition(&t.depth, ImageUse::DepthTarget, ImageUse::CopySource);
+    rec.copy_to_buffers(&[(&t.depth, &t.depth_buf), (&t.normal, &t.normal_buf), (&t.albedo, &t.albedo_buf)]);
     Ok(())
 }
 

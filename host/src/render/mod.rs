@@ -1,64 +1,94 @@
-//! Rendering a frame: G-buffer, then either brute-force deferred shading or the clustered chain.
+//! Rendering a frame: upload the scene, then run one lighting technique through the frame loop.
 //!
-//! Clustered deferred (Olsson et al. 2012; Karas' Vulkan design), one kernel per step:
-//! 1. **G-buffer** (raster) → depth | normal | albedo buffer (`gbuffer.rs`).
-//! 2. **keys** — cluster key per pixel (`clustered::pixel_keys`).
-//! 3. **page table** — mark pages → scan (allocate) → record → store slots → scan → compact
-//!    into the sorted unique-cluster list (`page_table`), all sized from the resolution.
-//! 4. **assignment** — per unique cluster, its lights (naive: every light against the cluster's
-//!    AABB), as counts → scan → fill; offsets + counts give each cluster's list.
-//! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
+//! Every technique has one shape ([`technique::LightingTechnique`]: create → record → grow →
+//! report) and lives in its own file: `deferred.rs` (the brute-force reference), `clustered.rs`
+//! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
+//! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`. The frame loop
+//! ([`render`]) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
+//! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
+//! frames, growth and re-run (at most [`technique::MAX_REGROWTHS`] times; a frame never drops a
+//! light), per-pass medians and the read-back for CPU checks.
 //!
-//! The baselines of issue 5 live in their own files, one match arm each: `tiled.rs` (`tiled`,
-//! `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`.
-//!
-//! Capacities that depend on the view (pages touched, light references) are GPU counters read
-//! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs — a
-//! frame never drops a light. Memory per buffer is reported in [`Frame::buffers`].
+//! ## How to add a technique
+//! 1. Write `render/<name>.rs`: a struct with a constructor `fn(&Gpu, &FrameInputs) ->
+//!    Result<Self>` (allocate, check limits) and an `impl LightingTechnique` (at least `record`
+//!    and `buffers`; `grow_if_needed`, `stats` and `record_async` where it has them). Its kernels
+//!    are typed handles in `shaders::kernels`, its pipelines fields of `gpu::Kernels` /
+//!    `gpu::RasterPipelines`; it records through `vk::Recorder` (dispatches, raster passes) and
+//!    holds no `unsafe` or Vulkan types.
+//! 2. Declare the module and register it with one line in the `techniques!` list below: doc,
+//!    variant, command-line name and constructor. The CLI (`--technique`), `manylights bench`
+//!    (`--techniques all`) and the tests that iterate [`Technique::ALL`] pick it up from there.
 pub mod bitonic;
 pub mod bvh;
+pub mod clustered;
 pub mod clustered_aabb;
+pub mod deferred;
 pub mod forward_plus;
 pub mod gbuffer;
 pub mod legend;
 pub mod reference;
-pub mod resources;
 pub mod scan;
 pub mod sort;
 pub mod stats;
+pub mod technique;
 pub mod tiled;
 
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, PassTiming, Profiler};
+use crate::vk::{Buffer, PassTiming, Profiler, Queue};
 use anyhow::{bail, Context as _, Result};
-use glam::Mat4;
 pub use gbuffer::{Draw, TextureData};
-use resources::{ClusterBuffers, Capacities};
+use glam::Mat4;
 use shaders::cluster_key::{slice_bounds, ClusterGrid};
 use shaders::layout::*;
+use technique::{FrameInputs, LightingTechnique, MAX_REGROWTHS};
 
-/// Lighting technique.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Technique {
+/// Declares [`Technique`] (the command line's `--technique` values) and its constructors from one
+/// line per technique: `doc, Variant = "name" => constructor`.
+macro_rules! techniques {
+    ($( $(#[doc = $doc:literal])* $variant:ident = $name:literal => $create:path, )*) => {
+        /// Lighting technique.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+        pub enum Technique {
+            $( $(#[doc = $doc])* #[value(name = $name)] $variant, )*
+        }
+
+        impl Technique {
+            /// Every technique, in registration order.
+            pub const ALL: &'static [Technique] = &[$(Technique::$variant),*];
+
+            /// The command-line name.
+            pub fn name(self) -> &'static str {
+                match self { $(Self::$variant => $name,)* }
+            }
+
+            /// Creates the technique for a frame.
+            fn create(self, gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Box<dyn LightingTechnique>> {
+                Ok(match self { $(Self::$variant => Box::new($create(gpu, f)?),)* })
+            }
+        }
+    };
+}
+
+techniques! {
     /// Every light for every pixel: the correctness reference.
-    Deferred,
+    Deferred = "deferred" => deferred::Deferred::new,
     /// Clustered deferred with unique clusters and naive (all-lights) assignment.
-    ClusteredNaive,
-    /// Clustered deferred with lights Morton-sorted (GPU radix sort) into a 32-ary BVH that each
-    /// unique cluster traverses.
-    ClusteredBvh,
+    ClusteredNaive = "clustered-naive" => clustered::Clustered::naive,
+    /// Clustered deferred with lights Morton-sorted on the GPU into a 32- or 64-ary BVH that each
+    /// unique cluster walks.
+    ClusteredBvh = "clustered-bvh" => clustered::Clustered::bvh,
     /// Tiled deferred (Olsson & Assarsson 2011; Harada et al. 2012): per screen tile, depth bounds,
-    /// frustum culling into a workgroup-memory list, shading in the same dispatch (`tiled.rs`).
-    Tiled,
+    /// frustum culling into a workgroup-memory list, shading in the same dispatch.
+    Tiled = "tiled" => tiled::Tiled::plain,
     /// `tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.
-    #[value(name = "tiled-2.5d")]
-    Tiled25d,
+    Tiled25d = "tiled-2.5d" => tiled::Tiled::depth_mask,
     /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
-    /// depth, staged sphere–box assignment with subgroup-aggregated atomics (`clustered_aabb.rs`).
-    ClusteredAabb,
+    /// depth, staged sphere–box assignment with subgroup-aggregated atomics.
+    ClusteredAabb = "clustered-aabb" => clustered_aabb::ClusteredAabb::new,
     /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists,
-    /// forward raster shading with depth test EQUAL (`forward_plus.rs`).
-    ForwardPlus,
+    /// forward raster shading with depth test EQUAL.
+    ForwardPlus = "forward-plus" => forward_plus::ForwardPlus::new,
 }
 
 /// Scene data as the renderer consumes it (world space; lights validated).
@@ -137,21 +167,27 @@ pub struct Frame {
     pub buffers: Vec<(String, u64)>,
     pub readback: Option<Readback>,
     pub grid: ClusterGrid,
-    /// The light sort and BVH build ran on the async-compute queue, overlapping the G-buffer
-    /// raster ([`ASYNC_PASSES`]); the main queue's passes then account for the frame's time.
+    /// The technique's light-only passes (`clustered-bvh`: light sort and BVH build) ran on the
+    /// async-compute queue, overlapping the G-buffer raster; the main queue's passes then account
+    /// for the frame's time.
     pub overlapped: bool,
 }
 
 impl Frame {
-    /// Whether pass `name` ran on the main queue (every pass, except the [`ASYNC_PASSES`] of an
-    /// overlapped frame): the main queue's passes, waits included, make up the frame's time.
+    /// Whether pass `name` ran on the main queue (every pass, except those an overlapped frame ran
+    /// on the async-compute queue): the main queue's passes, waits included, make up the frame's
+    /// time.
     pub fn on_main_queue(&self, name: &str) -> bool {
-        !(self.overlapped && ASYNC_PASSES.contains(&name))
+        self.timings.iter().find(|t| t.name == name).is_none_or(|t| t.queue == Queue::Main)
+    }
+
+    /// Whether pass `name` recorded raster work (the G-buffer, Forward+'s depth pre-pass and
+    /// forward pass): only part of a GPU may run raster work, so raster and compute are reported
+    /// apart.
+    pub fn is_raster(&self, name: &str) -> bool {
+        self.timings.iter().any(|t| t.name == name && t.raster)
     }
 }
-
-/// Passes that run on the async-compute queue when the frame is overlapped.
-pub const ASYNC_PASSES: [&str; 3] = ["morton keys", "light sort", "bvh build"];
 
 /// Which shading variant a frame runs: 1 (with the specular term) only if the scene has specular
 /// materials.
@@ -185,7 +221,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     }
     let ctx = &gpu.ctx;
     let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
-    if ctx.info.driver_name.to_lowercase().contains("llvmpipe") && scene.lights.len() > max_lights as usize {
+    if ctx.info.is_llvmpipe() && scene.lights.len() > max_lights as usize {
         bail!(
             "{} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \
              can visit at most {max_lights} lights there (use fewer lights or a GPU)",
@@ -196,7 +232,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
         .context("uploading geometry")?;
     let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
-    let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision).context("allocating the G-buffer")?;
+    let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision).context("allocating the G-buffer")?;
     let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
     let lights_view = lights_to_view(scene.view, scene.lights);
     let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
@@ -222,134 +258,86 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         ("lights".into(), lights.size),
         ("frame".into(), frame_buf.size),
     ];
+    let inputs = FrameInputs {
+        params,
+        settings: s,
+        geometry: &geometry,
+        indices: scene.indices,
+        textures: &textures,
+        camera: &camera,
+        targets: &targets,
+        lights: &lights,
+        lights_view: &lights_view,
+        materials: &materials,
+        bounds: &bounds_buf,
+        frame: &frame_buf,
+    };
+    let mut tech = s.technique.create(gpu, &inputs)?;
+    let overlapped = tech.has_async_work() && s.async_compute && ctx.async_compute_queue.is_some();
     let mut profiler = Profiler::new(ctx, 16)?;
-    let mut regrowths = 0;
-    let (mut unique_clusters, mut light_refs, mut pages, mut max_list) = (0, 0, 0, 0);
+    let mut async_profiler = Profiler::new_async(ctx, 4)?;
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
-    let mut cluster = None;
-    let mut overlapped = false;
-    match s.technique {
-        Technique::Deferred => {
-            for f in 0..=s.frames {
-                gpu.run(Some(&mut profiler), |rec| {
+    let (mut f, mut regrowths) = (0, 0);
+    while f <= s.frames {
+        gpu.run_overlapped(
+            overlapped,
+            Some(&mut profiler),
+            Some(&mut async_profiler),
+            |rec| tech.record_async(gpu, rec, &inputs),
+            |rec| {
+                if tech.uses_gbuffer() {
                     rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                    rec.pass("shading", |rec| {
-                        rec.dispatch_linear(&gpu.kernels.shade_deferred[specular_variant(&params)], &[&targets.depth_buf, &targets.normal_buf, &targets.albedo_buf, &lights, &materials, &frame_buf, &bounds_buf], &params, n)
-                    })
-                })?;
-                if f > 0 || s.frames == 0 {
-                    timings_all.push(profiler.results()?);
                 }
+                tech.record(gpu, rec, &inputs)
+            },
+        )?;
+        if let Some(grown) = tech.grow_if_needed(gpu)? {
+            regrowths += 1;
+            if regrowths > MAX_REGROWTHS {
+                bail!("{}: buffers keep growing ({grown}): giving up", s.technique.name());
             }
+            continue; // re-run this frame
         }
-        Technique::Tiled | Technique::Tiled25d => {
-            let mut t = tiled::Tiled::new(gpu, &params, s.technique == Technique::Tiled25d)?;
-            for f in 0..=s.frames {
-                gpu.run(Some(&mut profiler), |rec| {
-                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                    t.record(gpu, rec, &targets, &lights, &materials, &frame_buf, &bounds_buf)
-                })?;
-                if f > 0 || s.frames == 0 {
-                    timings_all.push(profiler.results()?);
-                }
-            }
-            (light_refs, max_list) = t.list_totals()?;
-            buffers.extend(t.sizes());
+        if f > 0 || s.frames == 0 {
+            let mut t = async_profiler.results()?;
+            t.extend(profiler.results()?);
+            timings_all.push(t);
         }
-        Technique::ClusteredAabb => {
-            let gbuf = |rec: &mut crate::vk::Recorder<'_>| rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets));
-            let o = clustered_aabb::run(gpu, &params, s.frames, &mut profiler, &gbuf, &targets, &bounds_buf, &lights, &materials, &frame_buf)?;
-            (timings_all, unique_clusters, light_refs, max_list, regrowths) = (o.timings, o.active, o.refs, o.max_list, o.regrowths);
-            buffers.extend(o.buffers);
-        }
-        Technique::ForwardPlus => {
-            let sc = forward_plus::SceneGpu { geometry: &geometry, indices: scene.indices, textures: &textures, camera: &camera, lights: &lights, materials: &materials };
-            let o = forward_plus::run(gpu, &params, s.frames, &mut profiler, &sc, &targets, &frame_buf)?;
-            (timings_all, light_refs, max_list, regrowths) = (o.timings, o.refs, o.max_list, o.regrowths);
-            buffers.extend(o.buffers);
-        }
-        Technique::ClusteredNaive | Technique::ClusteredBvh => {
-            let bvh = match s.technique {
-                Technique::ClusteredBvh => {
-                    let b = match s.bvh_branching {
-                        0 => bvh::LightBvh::default_branching(ctx.info.subgroup_size),
-                        b if shaders::light_bvh::valid_branching(b) => b,
-                        b => bail!("BVH branching {b}: 32 or 64"),
-                    };
-                    Some(bvh::LightBvh::new(gpu, &lights_view, b, s.sort).context("allocating the light BVH")?)
-                }
-                _ => None,
-            };
-            if let Some(b) = &bvh {
-                buffers.push(("light bvh".into(), b.bytes()));
-            }
-            overlapped = bvh.is_some() && s.async_compute && ctx.async_compute_queue.is_some();
-            let mut async_profiler = crate::vk::Profiler::new_async(ctx, 4)?;
-            let mut caps = Capacities::initial(&grid, scene.lights.len() as u32);
-            let mut cb = ClusterBuffers::new(gpu, &grid, caps)?;
-            let mut f = 0;
-            while f <= s.frames {
-                let mut p = params;
-                p.light_capacity = caps.light_refs;
-                // The light sort + BVH build depend on the lights only: on the async-compute queue
-                // they overlap the G-buffer raster (the assignment waits for them).
-                gpu.run_overlapped(
-                    overlapped,
-                    Some(&mut profiler),
-                    Some(&mut async_profiler),
-                    |rec| bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, &lights)),
-                    |rec| {
-                        rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                        cb.record(gpu, rec, &p, &targets, &bounds_buf, &lights, &materials, &frame_buf, bvh.as_ref())
-                    },
-                )?;
-                let c: Vec<u32> = cb.counters.read(COUNTERS as usize)?;
-                (unique_clusters, light_refs, pages) =
-                    (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
-                if let Some(grown) = caps.grown(pages, light_refs) {
-                    regrowths += 1;
-                    if regrowths > 8 {
-                        bail!("cluster buffers keep growing ({grown:?}): giving up");
-                    }
-                    caps = grown;
-                    cb = ClusterBuffers::new(gpu, &grid, caps).with_context(|| {
-                        format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)
-                    })?;
-                    continue; // re-run this frame
-                }
-                if f > 0 || s.frames == 0 {
-                    let mut t = async_profiler.results()?;
-                    t.extend(profiler.results()?);
-                    timings_all.push(t);
-                }
-                f += 1;
-            }
-            buffers.extend(cb.sizes());
-            cluster = Some(cb);
-        }
+        f += 1;
     }
+    let lists = tech.stats()?;
+    buffers.extend(tech.buffers());
+    let cluster_lists = if s.read_back { tech.cluster_lists()? } else { None };
+    drop(tech);
     let pixels: Vec<u32> = frame_buf.read(n as usize)?;
     let readback = if s.read_back {
-        let mut depth = targets.depth_buf;
-        let gbuffer: Vec<u32> = depth.read(n as usize)?;
+        let depth: Vec<u32> = targets.depth_buf.read(n as usize)?;
         let precision = shaders::octahedral::Precision::from_u32(s.normal_precision);
-        let mut normal_buf = targets.normal_buf;
-        let words: Vec<u32> = normal_buf.read((precision.gbuffer_words() * n) as usize)?;
+        let words: Vec<u32> = targets.normal_buf.read((precision.gbuffer_words() * n) as usize)?;
         let normals = words
             .chunks(precision.gbuffer_words() as usize)
             .map(|w| shaders::octahedral::decode([w[0], w.get(1).copied().unwrap_or(0), w.get(2).copied().unwrap_or(0)], precision))
             .collect();
-        let mut rb = match cluster.as_mut() {
-            Some(cb) => cb.read_back(gbuffer, unique_clusters, light_refs, lights_view.clone(), grid, bounds.clone())?,
-            None => Readback { depth: gbuffer, normals: vec![], keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![], lights_view, grid, bounds },
-        };
-        rb.normals = normals;
-        Some(rb)
+        let c = cluster_lists.unwrap_or(technique::ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
+        Some(Readback { depth, normals, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds })
     } else {
         None
     };
     let (timings, timing_spread) = median_timings(&timings_all);
-    Ok(Frame { pixels, timings, timing_spread, unique_clusters, light_refs, pages, regrowths, max_list, buffers, readback, grid, overlapped })
+    Ok(Frame {
+        pixels,
+        timings,
+        timing_spread,
+        unique_clusters: lists.clusters,
+        light_refs: lists.light_refs,
+        pages: lists.pages,
+        regrowths,
+        max_list: lists.max_list,
+        buffers,
+        readback,
+        grid,
+        overlapped,
+    })
 }
 
 /// Per-pass median over frames, and the (min, max) beside it (passes matched by position).
@@ -361,7 +349,7 @@ fn median_timings(all: &[Vec<PassTiming>]) -> (Vec<PassTiming>, Vec<(f64, f64)>)
         .map(|(i, p)| {
             let mut v: Vec<f64> = all.iter().filter_map(|f| f.get(i).map(|t| t.ms)).collect();
             v.sort_by(|a, b| a.total_cmp(b));
-            (PassTiming { name: p.name.clone(), ms: v[v.len() / 2] }, (v[0], v[v.len() - 1]))
+            (PassTiming { ms: v[v.len() / 2], ..p.clone() }, (v[0], v[v.len() - 1]))
         })
         .unzip()
 }

@@ -7,18 +7,9 @@
 //! The grand total can be stored into a counter slot (`scan_store_total`), so later kernels
 //! read it without a round trip to the host.
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Recorder, VkResult};
+use crate::vk::{fold, Buffer, Recorder, VkResult};
 use shaders::layout::{ScanFixParams, ScanParams};
 use shaders::scan::SCAN_WORKGROUP;
-
-/// Workgroups per dispatch axis (Vulkan guarantees 65 535).
-pub const MAX_GROUPS_PER_AXIS: u32 = 65_535;
-
-/// `groups` workgroups as a 2D grid whose linear index covers them all.
-pub fn fold(groups: u32) -> [u32; 3] {
-    let gx = groups.clamp(1, MAX_GROUPS_PER_AXIS);
-    [gx, groups.div_ceil(gx).max(1), 1]
-}
 
 struct Level {
     totals: Buffer,

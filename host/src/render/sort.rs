@@ -2,7 +2,8 @@
 //! per pass, ping-ponging between the caller's buffers and scratch buffers. An even number of
 //! passes is always run (an extra pass over zero digits is the identity), so the result ends in
 //! the caller's buffers. Scratch: 8 B per element + `4 · 256 · ⌈n/256⌉` B of counts (×2) + scan.
-use super::scan::{fold, DeviceScan};
+use super::scan::DeviceScan;
+use crate::vk::fold;
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use shaders::layout::RadixParams;

@@ -4,7 +4,7 @@
 //! more lights than the list holds is culled and shaded in several rounds on the GPU.
 //!
 //! Memory: one word per tile (its light count, for statistics and `--stats`).
-use super::gbuffer::Targets;
+use super::technique::{FrameInputs, LightingTechnique, ListStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use anyhow::{bail, Result};
@@ -18,14 +18,24 @@ pub struct Tiled {
 }
 
 impl Tiled {
+    /// `tiled`: per-tile depth bounds and frustum.
+    pub fn plain(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
+        Self::new(gpu, &f.params, false)
+    }
+
+    /// `tiled-2.5d`: plus Harada's 32-cell depth mask per tile.
+    pub fn depth_mask(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
+        Self::new(gpu, &f.params, true)
+    }
+
     /// Checks the tile size and, on llvmpipe, the light count (its loop limiter), and allocates.
-    pub fn new(gpu: &Gpu, frame: &FrameParams, depth_mask: bool) -> Result<Self> {
+    fn new(gpu: &Gpu, frame: &FrameParams, depth_mask: bool) -> Result<Self> {
         let g = &frame.grid;
         if g.tile_size > MAX_TILED_TILE {
             bail!("--tile-size {}: the tiled techniques handle tiles up to {MAX_TILED_TILE} px (4 pixels per invocation of a 16x16 workgroup)", g.tile_size);
         }
         let max = max_lights_llvmpipe(g.tile_size);
-        if gpu.ctx.info.driver_name.to_lowercase().contains("llvmpipe") && frame.num_lights > max {
+        if gpu.ctx.info.is_llvmpipe() && frame.num_lights > max {
             bail!(
                 "{} lights: on lavapipe (loop limiter: 65 535 iterations per invocation) a tiled frame with {} px tiles handles at most {max}",
                 frame.num_lights,
@@ -39,18 +49,16 @@ impl Tiled {
         })
     }
 
-    pub fn sizes(&self) -> Vec<(String, u64)> {
-        vec![(self.tile_lights.name.clone(), self.tile_lights.size)]
-    }
+}
 
-    /// Records the culling + shading dispatch.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, g: &Targets, lights: &Buffer, materials: &Buffer, frame: &Buffer, bounds: &Buffer) -> VkResult<()> {
+impl LightingTechnique for Tiled {
+    fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let grid = &self.params.frame.grid;
+        let g = f.targets;
         rec.pass("culling + shading", |rec| {
             rec.dispatch(
                 &gpu.kernels.shade_tiled[super::specular_variant(&self.params.frame)],
-                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, lights, materials, frame, bounds, &self.tile_lights],
+                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.tile_lights],
                 &self.params,
                 [grid.tiles_x, grid.tiles_y, 1],
             )
@@ -58,9 +66,17 @@ impl Tiled {
     }
 
     /// Light references of the frame (the sum of the tiles' list lengths) and the longest list.
-    pub fn list_totals(&mut self) -> VkResult<(u32, u32)> {
+    fn stats(&mut self) -> Result<ListStats> {
         let g = &self.params.frame.grid;
         let counts: Vec<u32> = self.tile_lights.read((g.tiles_x * g.tiles_y) as usize)?;
-        Ok((counts.iter().fold(0u32, |a, &c| a.saturating_add(c)), counts.iter().copied().max().unwrap_or(0)))
+        Ok(ListStats {
+            light_refs: counts.iter().fold(0u32, |a, &c| a.saturating_add(c)),
+            max_list: counts.iter().copied().max().unwrap_or(0),
+            ..ListStats::default()
+        })
+    }
+
+    fn buffers(&self) -> Vec<(String, u64)> {
+        vec![(self.tile_lights.name.clone(), self.tile_lights.size)]
     }
 }

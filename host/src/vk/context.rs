@@ -3,6 +3,8 @@
 use super::device::{self, DeviceInfo};
 use super::error::{CallContext, VkError, VkResult};
 use super::instance::Instance;
+use super::pipeline::Recorder;
+use super::profiler::Profiler;
 use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::mem::ManuallyDrop;
@@ -108,6 +110,39 @@ impl Context {
             // Naming is best effort: a failure only loses a label.
             let _ = unsafe { du.set_debug_utils_object_name(&info) };
         }
+    }
+
+    /// Records with `f` on a [`Recorder`] (its passes timed by `profiler`), submits to the
+    /// graphics+compute queue, waits.
+    pub fn run<R>(&self, profiler: Option<&mut Profiler>, f: impl FnOnce(&mut Recorder<'_>) -> VkResult<R>) -> VkResult<R> {
+        self.submit_and_wait(|cmd| f(&mut Recorder::new(self, cmd, profiler)))
+    }
+
+    /// Records `on_async` for the async-compute queue and `on_main` for the graphics queue, which
+    /// waits for it before its first compute shader (its raster passes overlap the async work);
+    /// waits for both. Passes of `on_async` are timed by `async_profiler`. Without an async-compute
+    /// queue (or with `overlap` false) both go into one command buffer, `on_async` first, timed by
+    /// `profiler`.
+    pub fn run_overlapped<A, B>(
+        &self,
+        overlap: bool,
+        profiler: Option<&mut Profiler>,
+        async_profiler: Option<&mut Profiler>,
+        on_async: impl FnOnce(&mut Recorder<'_>) -> VkResult<A>,
+        on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
+    ) -> VkResult<(A, B)> {
+        if !overlap || self.async_compute_queue.is_none() {
+            return self.run(profiler, |rec| {
+                let a = on_async(rec)?;
+                Ok((a, on_main(rec)?))
+            });
+        }
+        self.submit_overlapped_and_wait(
+            |cmd| on_async(&mut Recorder::new(self, cmd, async_profiler)),
+            |cmd| on_main(&mut Recorder::new(self, cmd, profiler)),
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+        )
+        .expect("an async-compute queue (checked above)")
     }
 
     /// Records commands with `record`, submits them to the graphics+compute queue and waits.

@@ -36,6 +36,12 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
+    /// Mesa's CPU driver (lavapipe on llvmpipe), whose loop limiter ends a shader's loops after
+    /// 65 535 iterations: techniques cap the lights one invocation visits there.
+    pub fn is_llvmpipe(&self) -> bool {
+        self.driver_name.to_lowercase().contains("llvmpipe")
+    }
+
     /// One line naming the device, e.g. for the CLI's stderr and the notes.
     pub fn line(&self) -> String {
         format!(

@@ -17,6 +17,12 @@ pub struct Image {
 }
 
 impl Image {
+    /// A render target of `format` (drawn into, then copied out).
+    pub fn target(ctx: &Context, name: &str, width: u32, height: u32, format: super::raster::TargetFormat) -> VkResult<Self> {
+        let usage = if format.is_depth() { vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT } else { vk::ImageUsageFlags::COLOR_ATTACHMENT };
+        Self::new_2d(ctx, name, width, height, format.raw(), usage | vk::ImageUsageFlags::TRANSFER_SRC)
+    }
+
     /// A device-local, optimally tiled 2D image with one mip level and a colour or depth view.
     pub fn new_2d(ctx: &Context, name: &str, width: u32, height: u32, format: vk::Format, usage: vk::ImageUsageFlags) -> VkResult<Self> {
         let limit = unsafe { ctx.instance.raw.get_physical_device_properties(ctx.physical) }.limits.max_image_dimension2_d;
@@ -153,7 +159,9 @@ impl Drop for Sampler {
 
 /// Uploads tightly packed RGBA8 texels into a new sampled image, left in
 /// `SHADER_READ_ONLY_OPTIMAL` for fragment shaders.
-pub fn upload_rgba8(ctx: &Context, name: &str, width: u32, height: u32, format: vk::Format, texels: &[u8]) -> VkResult<Image> {
+/// sRGB colour data (`srgb`) is decoded to linear when sampled; masks and linear data are not.
+pub fn upload_rgba8(ctx: &Context, name: &str, width: u32, height: u32, srgb: bool, texels: &[u8]) -> VkResult<Image> {
+    let format = if srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
     if texels.len() as u64 != 4 * width as u64 * height as u64 {
         return Err(VkError::InvalidImage { name: name.into(), what: format!("{} bytes for {width}x{height} RGBA8", texels.len()) });
     }

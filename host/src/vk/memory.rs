@@ -75,6 +75,13 @@ impl Buffer {
         Self::new(ctx, name, size, STORAGE, MemoryLocation::GpuOnly)
     }
 
+    /// A device-local index (and storage) buffer holding `indices` (a word for none).
+    pub fn indices(ctx: &Context, name: &str, indices: &[u32]) -> VkResult<Self> {
+        let mut b = Self::new(ctx, name, 4 * indices.len().max(1) as u64, STORAGE | vk::BufferUsageFlags::INDEX_BUFFER, MemoryLocation::GpuOnly)?;
+        b.write(indices)?;
+        Ok(b)
+    }
+
     /// A device-local storage buffer holding `data`.
     pub fn from_slice<T: Pod>(ctx: &Context, name: &str, data: &[T]) -> VkResult<Self> {
         let bytes: &[u8] = bytemuck::cast_slice(data);

@@ -9,9 +9,11 @@
 //! | `memory.rs` | buffers (`gpu-allocator`), upload/read-back, barriers |
 //! | `pipeline.rs` | shader modules, typed compute pipelines, the dispatch recorder |
 //! | `profiler.rs` | GPU timestamps per pass |
-//! | `raster.rs` | graphics pipelines (dynamic rendering, vertex pulling) |
+//! | `raster.rs` | typed graphics pipelines (dynamic rendering, vertex pulling), target formats |
+//! | `draw.rs` | raster recording: target transitions, rendering, indexed draws, target copies |
 pub mod context;
 pub mod device;
+pub mod draw;
 pub mod error;
 pub mod image;
 pub mod instance;
@@ -25,6 +27,7 @@ pub use device::DeviceInfo;
 pub use error::{VkError, VkResult};
 pub use image::{Image, Sampler};
 pub use memory::{Buffer, MemoryLocation};
-pub use pipeline::{ComputePipeline, Recorder, ShaderModule};
-pub use profiler::{PassTiming, Profiler};
-pub use raster::{GraphicsPipeline, RasterDesc};
+pub use draw::{Attachment, Binding, ImageUse, Load};
+pub use pipeline::{fold, ComputePipeline, Recorder, ShaderModule, MAX_GROUPS_PER_AXIS};
+pub use profiler::{PassTiming, Profiler, Queue};
+pub use raster::{DepthTest, GraphicsPipeline, TargetFormat};

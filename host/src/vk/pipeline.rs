@@ -113,11 +113,32 @@ impl<P> Drop for ComputePipeline<P> {
     }
 }
 
-/// Records dispatches (and profiler scopes) into one command buffer.
+/// Workgroups per dispatch axis (Vulkan guarantees 65 535).
+pub const MAX_GROUPS_PER_AXIS: u32 = 65_535;
+
+/// `groups` workgroups as a 2D grid whose linear index covers them all.
+pub fn fold(groups: u32) -> [u32; 3] {
+    let gx = groups.clamp(1, MAX_GROUPS_PER_AXIS);
+    [gx, groups.div_ceil(gx).max(1), 1]
+}
+
+/// Records dispatches, raster passes (`draw.rs`) and profiler scopes into one command buffer.
 pub struct Recorder<'a> {
     pub ctx: &'a Context,
-    pub cmd: vk::CommandBuffer,
-    pub profiler: Option<&'a mut Profiler>,
+    pub(crate) cmd: vk::CommandBuffer,
+    profiler: Option<&'a mut Profiler>,
+    /// The graphics pipeline bound last inside the current raster pass (null outside one).
+    pub(crate) bound_graphics: vk::Pipeline,
+}
+
+impl<'a> Recorder<'a> {
+    /// A recorder over `cmd`; resets the profiler's queries first.
+    pub(crate) fn new(ctx: &'a Context, cmd: vk::CommandBuffer, mut profiler: Option<&'a mut Profiler>) -> Self {
+        if let Some(p) = profiler.as_deref_mut() {
+            p.reset(cmd);
+        }
+        Self { ctx, cmd, profiler, bound_graphics: vk::Pipeline::null() }
+    }
 }
 
 impl Recorder<'_> {
@@ -131,7 +152,7 @@ impl Recorder<'_> {
                 what: format!("binds {} storage buffers, {} given", k.storage_buffers, buffers.len()),
             });
         }
-        let limit = 65_535;
+        let limit = MAX_GROUPS_PER_AXIS;
         if groups.iter().any(|&g| g > limit) {
             return Err(VkError::Kernel { entry: k.entry, what: format!("dispatch of {groups:?} workgroups exceeds {limit} per axis") });
         }
@@ -176,7 +197,7 @@ impl Recorder<'_> {
     /// 2D grid (the kernel linearises `wg.y · num_wg.x + wg.x`).
     pub fn dispatch_linear<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, n: u32) -> VkResult<()> {
         let groups = n.div_ceil(pipe.kernel.invocations());
-        self.dispatch(pipe, buffers, params, crate::render::scan::fold(groups))
+        self.dispatch(pipe, buffers, params, fold(groups))
     }
 
     /// Dispatches a kernel that gives each of `items` its own subgroup (item = workgroup index ·
@@ -185,13 +206,20 @@ impl Recorder<'_> {
     /// the driver picks; surplus subgroups find no item and return.
     pub fn dispatch_subgroups<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, items: u32) -> VkResult<()> {
         let per_group = (pipe.kernel.invocations() / self.ctx.info.max_subgroup_size.max(1)).max(1);
-        self.dispatch(pipe, buffers, params, crate::render::scan::fold(items.div_ceil(per_group)))
+        self.dispatch(pipe, buffers, params, fold(items.div_ceil(per_group)))
     }
 
     /// Fills the first `bytes` of a buffer with a repeated `u32` and makes it visible to kernels.
     pub fn fill(&mut self, buffer: &Buffer, value: u32) {
         unsafe { self.ctx.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, buffer.size, value) };
         barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+    }
+
+    /// Notes (for the profiler) that the pass being recorded does raster work.
+    pub(crate) fn mark_raster(&mut self) {
+        if let Some(p) = self.profiler.as_mut() {
+            p.mark_raster();
+        }
     }
 
     /// Runs `f` inside a named GPU-timed pass (when a profiler is attached).

@@ -7,11 +7,23 @@ use super::context::Context;
 use super::error::{CallContext, VkResult};
 use ash::vk;
 
+/// The queue a pass ran on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Queue {
+    /// The graphics + compute queue.
+    Main,
+    /// The async-compute queue (overlapping the main queue's work).
+    AsyncCompute,
+}
+
 /// One timed pass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
     pub name: String,
     pub ms: f64,
+    pub queue: Queue,
+    /// The pass recorded raster work (it began rendering).
+    pub raster: bool,
 }
 
 pub struct Profiler {
@@ -20,29 +32,34 @@ pub struct Profiler {
     capacity: u32,
     /// Valid timestamp bits of the queue family this profiler's command buffers run on.
     bits: u32,
+    queue: Queue,
     names: Vec<String>,
+    /// Per pass: whether it recorded raster work.
+    raster: Vec<bool>,
+    /// The pass being recorded.
+    open: Option<usize>,
 }
 
 impl Profiler {
     /// Room for `passes` timed passes per submission on the graphics+compute queue.
     pub fn new(ctx: &Context, passes: u32) -> VkResult<Self> {
-        Self::with_bits(ctx, passes, ctx.info.timestamp_valid_bits)
+        Self::with_bits(ctx, passes, ctx.info.timestamp_valid_bits, Queue::Main)
     }
 
     /// A profiler for command buffers of the async-compute queue (disabled where that family has
     /// no timestamps, or where there is no such queue).
     pub fn new_async(ctx: &Context, passes: u32) -> VkResult<Self> {
-        Self::with_bits(ctx, passes, ctx.info.async_timestamp_valid_bits)
+        Self::with_bits(ctx, passes, ctx.info.async_timestamp_valid_bits, Queue::AsyncCompute)
     }
 
-    fn with_bits(ctx: &Context, passes: u32, bits: u32) -> VkResult<Self> {
+    fn with_bits(ctx: &Context, passes: u32, bits: u32, queue: Queue) -> VkResult<Self> {
         let mut pool = vk::QueryPool::null();
         if bits > 0 {
             let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2 * passes);
             pool = unsafe { ctx.device.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
             ctx.set_name(pool, "profiler timestamps");
         }
-        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, bits, names: Vec::new() })
+        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, bits, queue, names: Vec::new(), raster: Vec::new(), open: None })
     }
 
     pub fn enabled(&self) -> bool {
@@ -52,6 +69,8 @@ impl Profiler {
     /// Resets the queries; record before the first pass of a submission.
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.names.clear();
+        self.raster.clear();
+        self.open = None;
         if self.enabled() {
             unsafe { self.ctx.device.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
         }
@@ -64,13 +83,23 @@ impl Profiler {
         }
         let slot = self.names.len() as u32;
         self.names.push(name.to_owned());
+        self.raster.push(false);
+        self.open = Some(slot as usize);
         unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * slot) };
         Some(slot)
     }
 
     pub fn end(&mut self, cmd: vk::CommandBuffer, slot: Option<u32>) {
+        self.open = None;
         if let Some(s) = slot {
             unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, 2 * s + 1) };
+        }
+    }
+
+    /// Notes that the open pass records raster work.
+    pub(crate) fn mark_raster(&mut self) {
+        if let Some(i) = self.open {
+            self.raster[i] = true;
         }
     }
 
@@ -95,7 +124,7 @@ impl Profiler {
             .enumerate()
             .map(|(i, n)| {
                 let ticks = (raw[2 * i + 1] & mask).wrapping_sub(raw[2 * i] & mask) & mask;
-                PassTiming { name: n.clone(), ms: ticks as f64 * period * 1e-6 }
+                PassTiming { name: n.clone(), ms: ticks as f64 * period * 1e-6, queue: self.queue, raster: self.raster[i] }
             })
             .collect())
     }

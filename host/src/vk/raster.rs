@@ -1,69 +1,86 @@
 //! Graphics pipelines with dynamic rendering (Vulkan 1.3), no vertex-input state (vertex
-//! pulling from storage buffers), push-descriptor bindings and one push-constant block.
+//! pulling from storage buffers), push-descriptor bindings and one push-constant block; typed by
+//! the raster handle (`shaders::kernels::RasterKernel<P>`) they are made from, as compute
+//! pipelines are by their `Kernel<P>`.
 use super::context::Context;
 use super::error::{CallContext, VkError, VkResult};
 use super::pipeline::ShaderModule;
 use ash::vk;
+use shaders::kernels::RasterKernel;
 use std::ffi::CString;
 
-/// What a raster pipeline draws into and how.
-pub struct RasterDesc<'a> {
-    pub name: &'a str,
-    pub vertex_entry: &'a str,
-    pub fragment_entry: &'a str,
-    /// Storage buffers read by the vertex stage (set 0, bindings `0..n`).
-    pub vertex_storage_buffers: u32,
-    /// Storage buffers read by the fragment stage (bindings after the vertex stage's).
-    pub fragment_storage_buffers: u32,
-    /// Combined image samplers read by the fragment stage (bindings after the storage buffers).
-    pub fragment_samplers: u32,
-    /// Push-constant bytes (fragment stage).
-    pub push_constant_bytes: u32,
-    pub color_formats: &'a [vk::Format],
-    pub depth_format: vk::Format,
-    pub depth_compare: vk::CompareOp,
-    /// Whether passing fragments write depth (off for a pass over a pre-pass's depth).
-    pub depth_write: bool,
+/// Formats of render targets, named by what the renderer stores in them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TargetFormat {
+    /// One 32-bit word per pixel (octahedral normals, packed RGBA8 frames, draw indices).
+    R32Uint,
+    /// Four 32-bit words per pixel (float32 normals).
+    Rgba32Uint,
+    /// Linear RGBA8 (albedo).
+    Rgba8Unorm,
+    /// 32-bit float depth (reversed Z).
+    Depth32,
 }
 
-pub struct GraphicsPipeline {
+impl TargetFormat {
+    pub(crate) fn raw(self) -> vk::Format {
+        match self {
+            Self::R32Uint => vk::Format::R32_UINT,
+            Self::Rgba32Uint => vk::Format::R32G32B32A32_UINT,
+            Self::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
+            Self::Depth32 => vk::Format::D32_SFLOAT,
+        }
+    }
+
+    pub fn is_depth(self) -> bool {
+        self == Self::Depth32
+    }
+
+    /// Bytes per pixel.
+    pub fn bytes(self) -> u64 {
+        match self {
+            Self::Rgba32Uint => 16,
+            _ => 4,
+        }
+    }
+}
+
+/// The depth test of a raster pipeline (reversed Z: nearer is greater).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthTest {
+    /// Keep the nearest fragment and write its depth.
+    NearestWrites,
+    /// Pass fragments at exactly the stored depth (a pass over a pre-pass's depth); no writes.
+    EqualReadOnly,
+}
+
+/// A raster pipeline for handle `RasterKernel<P>`: drawing with it takes a `&P`.
+pub struct GraphicsPipeline<P> {
     ctx: Context,
-    pub raw: vk::Pipeline,
-    pub layout: vk::PipelineLayout,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
+    pub kernel: RasterKernel<P>,
 }
 
-impl GraphicsPipeline {
-    pub fn new(ctx: &Context, module: &ShaderModule, desc: &RasterDesc<'_>) -> VkResult<Self> {
+impl<P> GraphicsPipeline<P> {
+    /// A pipeline drawing `kernel` into colour targets of `colours` and a depth target.
+    pub fn new(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[TargetFormat], depth: DepthTest) -> VkResult<Self> {
         let d = &ctx.device;
-        let mut bindings: Vec<_> = (0..desc.vertex_storage_buffers)
-            .map(|b| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::VERTEX)
-            })
-            .collect();
-        bindings.extend((0..desc.fragment_storage_buffers).map(|b| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(desc.vertex_storage_buffers + b)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
-        }));
-        bindings.extend((0..desc.fragment_samplers).map(|s| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(desc.vertex_storage_buffers + desc.fragment_storage_buffers + s)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT)
-        }));
+        let binding = |b: u32, ty: vk::DescriptorType, stage: vk::ShaderStageFlags| {
+            vk::DescriptorSetLayoutBinding::default().binding(b).descriptor_type(ty).descriptor_count(1).stage_flags(stage)
+        };
+        let (vb, fb) = (kernel.vertex_storage_buffers, kernel.fragment_storage_buffers);
+        let mut bindings: Vec<_> = (0..vb).map(|b| binding(b, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::VERTEX)).collect();
+        bindings.extend((0..fb).map(|b| binding(vb + b, vk::DescriptorType::STORAGE_BUFFER, vk::ShaderStageFlags::FRAGMENT)));
+        bindings.extend(
+            (0..kernel.fragment_samplers).map(|s| binding(vb + fb + s, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, vk::ShaderStageFlags::FRAGMENT)),
+        );
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&bindings);
         let set_layout = unsafe { d.create_descriptor_set_layout(&set_info, None) }.call("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::FRAGMENT).size(desc.push_constant_bytes)];
+        let ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::FRAGMENT).size(std::mem::size_of::<P>() as u32)];
         let set_layouts = [set_layout];
         let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&ranges);
         let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }.call("vkCreatePipelineLayout") {
@@ -73,9 +90,9 @@ impl GraphicsPipeline {
                 return Err(e);
             }
         };
-        let mut this = Self { ctx: ctx.clone(), raw: vk::Pipeline::null(), layout, set_layout };
-        let vs = CString::new(desc.vertex_entry).expect("entry names have no NUL");
-        let fs = CString::new(desc.fragment_entry).expect("entry names have no NUL");
+        let mut this = Self { ctx: ctx.clone(), raw: vk::Pipeline::null(), layout, set_layout, kernel };
+        let vs = CString::new(kernel.vertex).expect("entry names have no NUL");
+        let fs = CString::new(kernel.fragment).expect("entry names have no NUL");
         let stages = [
             vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(module.raw).name(&vs),
             vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(module.raw).name(&fs),
@@ -90,21 +107,19 @@ impl GraphicsPipeline {
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(desc.depth_write)
-            .depth_compare_op(desc.depth_compare);
-        let blend: Vec<_> = desc
-            .color_formats
-            .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
-            .collect();
+        let (compare, write) = match depth {
+            DepthTest::NearestWrites => (vk::CompareOp::GREATER, true),
+            DepthTest::EqualReadOnly => (vk::CompareOp::EQUAL, false),
+        };
+        let depth_state = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(true).depth_write_enable(write).depth_compare_op(compare);
+        let blend: Vec<_> = colours.iter().map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)).collect();
         let blend_state = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
         let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+        let formats: Vec<vk::Format> = colours.iter().map(|f| f.raw()).collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
-            .color_attachment_formats(desc.color_formats)
-            .depth_attachment_format(desc.depth_format);
+            .color_attachment_formats(&formats)
+            .depth_attachment_format(TargetFormat::Depth32.raw());
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -112,7 +127,7 @@ impl GraphicsPipeline {
             .viewport_state(&viewport)
             .rasterization_state(&raster)
             .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
+            .depth_stencil_state(&depth_state)
             .color_blend_state(&blend_state)
             .dynamic_state(&dynamic_state)
             .layout(layout)
@@ -121,12 +136,12 @@ impl GraphicsPipeline {
             Ok(p) => p[0],
             Err((_, result)) => return Err(VkError::Call { call: "vkCreateGraphicsPipelines", result }),
         };
-        ctx.set_name(this.raw, desc.name);
+        ctx.set_name(this.raw, name);
         Ok(this)
     }
 }
 
-impl Drop for GraphicsPipeline {
+impl<P> Drop for GraphicsPipeline<P> {
     fn drop(&mut self) {
         unsafe {
             if self.raw != vk::Pipeline::null() {

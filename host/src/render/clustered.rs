@@ -1,16 +1,111 @@
-//! Buffers of the clustered chain and their capacities.
+//! `clustered-naive` and `clustered-bvh`: clustered deferred shading (Olsson et al. 2012, §3–4)
+//! in Karas' Vulkan design (virtual page table of unique clusters, Morton-sorted lights in a
+//! light BVH), one kernel per step:
+//! 1. **G-buffer** (raster, recorded by the frame loop) → depth | normal | albedo buffers.
+//! 2. **keys** — cluster key per pixel (`clustered::pixel_keys`): 32 px tiles × exponential
+//!    depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
+//! 3. **page table** — mark pages → scan (allocate) → record → store slots → scan → compact
+//!    into the sorted unique-cluster list (`page_table`), all sized from the resolution.
+//! 4. **assignment** — per unique cluster, its lights as counts → scan → fill; offsets + counts
+//!    give each cluster's list. `clustered-naive` tests every light against the cluster's AABB;
+//!    `clustered-bvh` walks the light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary
+//!    node boxes, on the async-compute queue, overlapping the G-buffer raster).
+//! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
-//! Sizes follow from the grid (page table: one word per page of the key space) and from two
-//! view-dependent capacities that grow on demand: pages touched (`slots` = 512 words per page)
-//! and light references (the concatenated light lists).
-use super::scan::DeviceScan;
+//! Capacities that depend on the view (pages touched, light references) are GPU counters read
+//! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs.
+//!
+//! Memory: 4 B per pixel (keys); 4 B per page of the key space ×2 (marks, page table); 8 B per
+//! slot (512 slots per touched page); 12 B per unique cluster (list, counts, offsets); 4 B per
+//! light reference; scan scratch ≈ 1/128 of what it scans; the BVH (`bvh.rs`).
+use super::bvh::LightBvh;
 use super::gbuffer::Targets;
-use super::Readback;
+use super::scan::DeviceScan;
+use super::technique::{grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
+use anyhow::{bail, Context as _, Result};
 use shaders::cluster_key::ClusterGrid;
 use shaders::layout::*;
 use shaders::page_table::page_count;
+
+/// `clustered-naive` (`bvh` none) or `clustered-bvh`.
+pub struct Clustered {
+    bvh: Option<LightBvh>,
+    grid: ClusterGrid,
+    buffers: ClusterBuffers,
+    /// `(unique clusters, light references, pages)` of the last frame.
+    last: (u32, u32, u32),
+}
+
+impl Clustered {
+    /// `clustered-naive`: every light tested against every unique cluster.
+    pub fn naive(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
+        Self::new(gpu, f, None)
+    }
+
+    /// `clustered-bvh`: lights sorted into a BVH that each unique cluster walks.
+    pub fn bvh(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
+        let s = f.settings;
+        let branching = match s.bvh_branching {
+            0 => LightBvh::default_branching(gpu.ctx.info.subgroup_size),
+            b if shaders::light_bvh::valid_branching(b) => b,
+            b => bail!("BVH branching {b}: 32 or 64"),
+        };
+        let bvh = LightBvh::new(gpu, f.lights_view, branching, s.sort).context("allocating the light BVH")?;
+        Self::new(gpu, f, Some(bvh))
+    }
+
+    fn new(gpu: &Gpu, f: &FrameInputs<'_>, bvh: Option<LightBvh>) -> Result<Self> {
+        let grid = f.params.grid;
+        let caps = Capacities::initial(&grid, f.params.num_lights);
+        let buffers = ClusterBuffers::new(gpu, &grid, caps).context("allocating the cluster buffers")?;
+        Ok(Self { bvh, grid, buffers, last: (0, 0, 0) })
+    }
+}
+
+impl LightingTechnique for Clustered {
+    fn has_async_work(&self) -> bool {
+        self.bvh.is_some()
+    }
+
+    /// The light sort + BVH build depend on the lights only: on the async-compute queue they
+    /// overlap the G-buffer raster (the assignment waits for them).
+    fn record_async(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
+        self.bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, f.lights))
+    }
+
+    fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
+        let p = FrameParams { light_capacity: self.buffers.caps.light_refs, ..f.params };
+        self.buffers.record(gpu, rec, &p, f.targets, f.bounds, f.lights, f.materials, f.frame, self.bvh.as_ref())
+    }
+
+    fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
+        let c: Vec<u32> = self.buffers.counters.read(COUNTERS as usize)?;
+        self.last = (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
+        let (_, refs, pages) = self.last;
+        let Some(caps) = self.buffers.caps.grown(pages, refs) else { return Ok(None) };
+        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps)
+            .with_context(|| format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs))?;
+        Ok(Some(format!("cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)))
+    }
+
+    fn stats(&mut self) -> Result<ListStats> {
+        let (clusters, light_refs, pages) = self.last;
+        Ok(ListStats { clusters, light_refs, pages, max_list: 0 })
+    }
+
+    fn buffers(&self) -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> = self.bvh.iter().map(|b| ("light bvh".to_string(), b.bytes())).collect();
+        v.extend(self.buffers.sizes());
+        v
+    }
+
+    fn cluster_lists(&mut self) -> Result<Option<ClusterLists>> {
+        let (unique, refs, _) = self.last;
+        Ok(Some(self.buffers.read_back(self.grid.width * self.grid.height, unique, refs)?))
+    }
+}
 
 /// View-dependent capacities.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,7 +123,7 @@ impl Capacities {
         // A page holds 512 keys of one slice: about 2 tile rows at 4K. Frames touch far fewer
         // pages than pixels; 1 page per 2048 pixels covers every view we tried, and more grows.
         let pages = page_count(grid).min(pixels.div_ceil(2048).max(64));
-        Self { pages, light_refs: lights.saturating_mul(8).clamp(4096, 1 << 24) }
+        Self { pages, light_refs: initial_list_capacity(lights) }
     }
 
     /// The capacities a frame that needed `pages` and `light_refs` requires, if larger.
@@ -36,7 +131,7 @@ impl Capacities {
         if pages <= self.pages && light_refs <= self.light_refs {
             return None;
         }
-        let grow = |need: u32, have: u32| if need > have { need.saturating_add(need / 4).max(have) } else { have };
+        let grow = |need: u32, have: u32| if need > have { grown_capacity(need).max(have) } else { have };
         Some(Self { pages: grow(pages, self.pages), light_refs: grow(light_refs, self.light_refs) })
     }
 
@@ -45,7 +140,7 @@ impl Capacities {
     }
 }
 
-pub struct ClusterBuffers {
+struct ClusterBuffers {
     pub caps: Capacities,
     page_count: u32,
     max_clusters: u32,
@@ -174,19 +269,13 @@ impl ClusterBuffers {
     }
 
     /// Reads the cluster data back (tests, statistics).
-    pub fn read_back(&mut self, gbuffer: Vec<u32>, unique: u32, refs: u32, lights_view: Vec<PointLight>, grid: ClusterGrid, bounds: Vec<f32>) -> VkResult<Readback> {
-        let pixels = (grid.width * grid.height) as usize;
-        Ok(Readback {
-            depth: gbuffer,
-            normals: Vec::new(),
-            keys: self.keys.read(pixels)?,
+    fn read_back(&mut self, pixels: u32, unique: u32, refs: u32) -> VkResult<ClusterLists> {
+        Ok(ClusterLists {
+            keys: self.keys.read(pixels as usize)?,
             unique: self.unique.read(unique as usize)?,
             counts: self.counts.read(unique as usize)?,
             offsets: self.offsets.read(unique as usize)?,
             list: self.list.read(refs as usize)?,
-            lights_view,
-            grid,
-            bounds,
         })
     }
 }

@@ -1,0 +1,124 @@
+//! The one shape of a lighting technique, and what every technique reads.
+//!
+//! Life cycle, driven by the frame loop in [`super::render`]:
+//! 1. **create** for the frame's size, scene and settings (`Technique::create`, the registry in
+//!    `render/mod.rs`): allocate, check limits, precompute what depends on the grid only;
+//! 2. per frame, **record**: [`LightingTechnique::record_async`] on the async-compute queue
+//!    (work that depends on the lights only), then — after the G-buffer pass, which the frame loop
+//!    records once when [`LightingTechnique::uses_gbuffer`] — [`LightingTechnique::record`] on the
+//!    main queue;
+//! 3. after the frame, **grow**: [`LightingTechnique::grow_if_needed`] reads the GPU counters
+//!    back; a view-dependent buffer that was too small is grown and the frame loop re-runs the
+//!    frame (at most [`MAX_REGROWTHS`] times), so no frame ever drops a light;
+//! 4. **report**: [`LightingTechnique::stats`] (light lists of the last frame),
+//!    [`LightingTechnique::buffers`] (bytes per buffer) and, for CPU checks,
+//!    [`LightingTechnique::cluster_lists`].
+use super::gbuffer::{Geometry, Targets, Textures};
+use super::Settings;
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, Recorder, VkResult};
+use anyhow::Result;
+use shaders::layout::{FrameParams, PointLight};
+
+/// Regrowths of a frame's buffers after which the frame loop gives up (each grows a buffer to
+/// what the frame needed + 25 %, so one is enough unless the need itself keeps changing).
+pub const MAX_REGROWTHS: u32 = 8;
+
+/// First capacity of a light-reference list: 8 references per light, at least 4096 and at
+/// most 2^24 (the need is read back after the first frame; more grows).
+pub fn initial_list_capacity(lights: u32) -> u32 {
+    lights.saturating_mul(8).clamp(4096, 1 << 24)
+}
+
+/// The capacity for a frame that needed `need` entries: the need + 25 %, so a view that moves a
+/// little does not regrow at once.
+pub fn grown_capacity(need: u32) -> u32 {
+    need.saturating_add(need / 4)
+}
+
+/// Everything a technique can read: the frame's parameters and the GPU buffers the frame loop
+/// uploads and allocates once per render.
+pub struct FrameInputs<'a> {
+    /// The frame's parameters (`light_capacity` 0: each technique sets its own).
+    pub params: FrameParams,
+    pub settings: &'a Settings,
+    pub geometry: &'a Geometry,
+    /// The merged index list on the CPU (Forward+ draws it in reverse order).
+    pub indices: &'a [u32],
+    pub textures: &'a Textures,
+    pub camera: &'a Buffer,
+    /// G-buffer targets and their buffer copies.
+    pub targets: &'a Targets,
+    /// View-space lights, on the GPU and (for host-side builds) on the CPU.
+    pub lights: &'a Buffer,
+    pub lights_view: &'a [PointLight],
+    pub materials: &'a Buffer,
+    /// The exponential depth-slice table of the cluster grid.
+    pub bounds: &'a Buffer,
+    /// The output frame (one packed RGBA8 word per pixel).
+    pub frame: &'a Buffer,
+}
+
+/// The light lists of the last frame (0 where a technique has no such thing).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ListStats {
+    /// Clusters that held pixels (unique or active clusters).
+    pub clusters: u32,
+    /// Light references of all lists together.
+    pub light_refs: u32,
+    /// Pages of the virtual page table touched.
+    pub pages: u32,
+    /// The longest list of one tile or cluster (tiled, forward+ and clustered-aabb).
+    pub max_list: u32,
+}
+
+/// Per-cluster light lists read back for CPU checks (the clustered techniques).
+pub struct ClusterLists {
+    pub keys: Vec<u32>,
+    pub unique: Vec<u32>,
+    pub counts: Vec<u32>,
+    pub offsets: Vec<u32>,
+    pub list: Vec<u32>,
+}
+
+/// One lighting technique (see the module doc for the life cycle).
+pub trait LightingTechnique {
+    /// Whether the frame loop records the G-buffer pass before [`Self::record`] (Forward+
+    /// rasterises its own depth pre-pass instead).
+    fn uses_gbuffer(&self) -> bool {
+        true
+    }
+
+    /// Whether [`Self::record_async`] records any work.
+    fn has_async_work(&self) -> bool {
+        false
+    }
+
+    /// Records the passes that depend on the lights only; they run on the async-compute queue
+    /// (overlapping the G-buffer raster) where the device has one, else first on the main queue.
+    fn record_async(&self, _gpu: &Gpu, _rec: &mut Recorder<'_>, _f: &FrameInputs<'_>) -> VkResult<()> {
+        Ok(())
+    }
+
+    /// Records the technique's passes on the main queue (after the G-buffer pass).
+    fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()>;
+
+    /// After a frame: reads its counters back and, when a view-dependent buffer was too small,
+    /// grows it and says what grew (the frame loop then re-runs the frame).
+    fn grow_if_needed(&mut self, _gpu: &Gpu) -> Result<Option<String>> {
+        Ok(None)
+    }
+
+    /// The light lists of the last frame.
+    fn stats(&mut self) -> Result<ListStats> {
+        Ok(ListStats::default())
+    }
+
+    /// Bytes of each buffer the technique owns.
+    fn buffers(&self) -> Vec<(String, u64)>;
+
+    /// The per-cluster lists of the last frame, for CPU checks (`None`: not a clustered technique).
+    fn cluster_lists(&mut self) -> Result<Option<ClusterLists>> {
+        Ok(None)
+    }
+}
