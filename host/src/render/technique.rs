@@ -122,3 +122,41 @@ pub trait LightingTechnique {
         Ok(None)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::Technique;
+    use super::*;
+    use clap::ValueEnum;
+
+    #[test]
+    fn the_registry_lists_every_technique_once_under_its_command_line_name() {
+        assert_eq!(Technique::ALL, Technique::value_variants(), "ALL is the registration order of every variant");
+        let names: Vec<&str> = Technique::ALL.iter().map(|t| t.name()).collect();
+        for (t, name) in Technique::ALL.iter().zip(&names) {
+            assert_eq!(Technique::from_str(name, false), Ok(*t), "{name} parses back to {t:?}");
+            assert_eq!(t.to_possible_value().map(|v| v.get_name().to_string()).as_deref(), Some(*name));
+        }
+        let mut unique = names.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), names.len(), "names are unique: {names:?}");
+        assert_eq!(
+            names,
+            ["deferred", "clustered-naive", "clustered-bvh", "tiled", "tiled-2.5d", "clustered-aabb", "forward-plus"],
+            "the seven techniques, in the order the bench sweeps them"
+        );
+    }
+
+    #[test]
+    fn list_capacities_start_bounded_and_grow_past_the_need() {
+        assert_eq!(initial_list_capacity(0), 4096);
+        assert_eq!(initial_list_capacity(1000), 8000);
+        assert_eq!(initial_list_capacity(u32::MAX), 1 << 24, "no overflow, capped");
+        for need in [0, 1, 4, 1000, 1 << 24, u32::MAX / 2, u32::MAX] {
+            let g = grown_capacity(need);
+            assert!(g >= need, "grown capacity {g} holds the need {need}");
+            assert!(need < 4 || g > need || need == u32::MAX, "grows by a quarter: {need} → {g}");
+        }
+    }
+}
