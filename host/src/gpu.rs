@@ -169,18 +169,6 @@ impl Gpu {
         }
     }
 
-    /// [`Context::run_overlapped`] on this GPU's context.
-    pub fn run_overlapped<A, B>(
-        &self,
-        overlap: bool,
-        profiler: Option<&mut Profiler>,
-        async_profiler: Option<&mut Profiler>,
-        on_async: impl FnOnce(&mut Recorder<'_>) -> VkResult<A>,
-        on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
-    ) -> VkResult<(A, B)> {
-        self.ctx.run_overlapped(overlap, profiler, async_profiler, on_async, on_main)
-    }
-
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.
     pub fn run<R>(&self, profiler: Option<&mut Profiler>, f: impl FnOnce(&mut Recorder<'_>) -> VkResult<R>) -> VkResult<R> {
         self.ctx.run(profiler, f)

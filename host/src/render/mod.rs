@@ -279,7 +279,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
     let (mut f, mut regrowths) = (0, 0);
     while f <= s.frames {
-        gpu.run_overlapped(
+        gpu.ctx.run_overlapped(
             overlapped,
             Some(&mut profiler),
             Some(&mut async_profiler),
