@@ -26,7 +26,8 @@ fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame
 
 /// Renders with the reference and both clustered techniques (naive, and BVH at branchings 32 and
 /// 64 with the radix light sort, 32 with the bitonic one) and checks
-/// everything the pipeline issues ask for; returns the naive clustered frame.
+/// what the clustered pipeline guarantees (`reference::check`: page-table compaction, complete
+/// light lists); returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
@@ -76,7 +77,7 @@ fn seventy_thousand_lights_all_visited() {
     assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
 }
 
-/// The top of the BVH issue's range: 100 000 lights on city and Sponza (when present), small
+/// The top of the light-count range the BVH is built for: 100 000 lights on city and Sponza, small
 /// frames so the CPU references stay quick.
 #[test]
 fn hundred_thousand_lights_city_and_sponza() {

@@ -1,4 +1,4 @@
-//! The baseline techniques (issue 5: `tiled`, `tiled-2.5d`, `clustered-aabb`) on the local device
+//! The baseline techniques (`tiled`, `tiled-2.5d`, `clustered-aabb`, `forward-plus`) on the local device
 //! (lavapipe in CI), validation on: each image equals the brute-force `deferred` reference
 //! (≤ 1/255 per channel after tonemapping) on city and Sponza at 1k and 10k lights, on a view with
 //! a large depth discontinuity, and when a fixed capacity overflows (2000 coincident lights: the

@@ -315,9 +315,16 @@ pub fn technique_name(t: Technique) -> String {
     t.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_else(|| format!("{t:?}"))
 }
 
+/// The command line as a user types it, for the results: the program as `manylights` (not the
+/// path it was started from), arguments with spaces quoted.
+fn command_line() -> String {
+    let args = std::env::args().skip(1).map(|s| if s.contains(' ') { format!("'{s}'") } else { s });
+    std::iter::once("manylights".to_string()).chain(args).collect::<Vec<_>>().join(" ")
+}
+
 /// `manylights bench`: sweep, CSV, plots, markdown.
 pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
-    let command = std::env::args().map(|s| if s.contains(' ') { format!("'{s}'") } else { s }).collect::<Vec<_>>().join(" ");
+    let command = command_line();
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     if a.study == Some(Study::Accuracy) {
         let rows = accuracy::study(gpu, a)?;

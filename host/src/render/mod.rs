@@ -9,7 +9,7 @@
 //!    AABB), as counts → scan → fill; offsets + counts give each cluster's list.
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
-//! The baselines of issue 5 live in their own files, one match arm each: `tiled.rs` (`tiled`,
+//! The baseline techniques live in their own files, one match arm each: `tiled.rs` (`tiled`,
 //! `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`.
 //!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
