@@ -1,7 +1,13 @@
-//! Typed kernel handles: the one place an entry-point name is written down (host side only).
-//! A handle carries its push-constant type `P`, the number of storage buffers the entry binds
-//! (set 0, bindings `0..storage_buffers`, in order) and its workgroup size, so the host cannot
-//! dispatch a kernel with the wrong parameters or buffer count.
+//! Typed kernel handles and raster entry names: the one place an entry-point name is written
+//! down (host side only). A handle carries its push-constant type `P`, the number of storage
+//! buffers the entry binds (set 0, bindings `0..storage_buffers`, in order) and its workgroup
+//! size, so the host cannot dispatch a kernel with the wrong parameters or buffer count.
+//!
+//! [`ALL`], [`VERTEX_ENTRIES`] and [`FRAGMENT_ENTRIES`] list every entry point.
+//! `tests/spirv_val.rs` checks them against the built modules in both directions (every entry
+//! point of a module is listed, every listed name is an entry point of the right stage) and checks
+//! each handle's workgroup size and storage-buffer bindings against the module's declarations, so
+//! a kernel left out of a list, or a handle that disagrees with its entry, fails that test.
 use crate::layout::*;
 use core::marker::PhantomData;
 
@@ -26,6 +32,11 @@ impl<P> Kernel<P> {
     /// Invocations per workgroup.
     pub const fn invocations(&self) -> u32 {
         self.workgroup_size[0] * self.workgroup_size[1] * self.workgroup_size[2]
+    }
+
+    /// The handle without its push-constant type, for the list of every kernel ([`ALL`]).
+    pub const fn erased(&self) -> Kernel<()> {
+        Kernel::new(self.entry, self.storage_buffers, self.workgroup_size, self.cooperative)
     }
 }
 
@@ -97,3 +108,82 @@ pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_splitters", 2, [crate::bitonic::SPLITTER_WORKGROUP, 1, 1], false);
 pub const BITONIC_MERGE: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_merge", 5, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
+
+/// Every compute kernel handle (see the module doc: a test keeps this list complete).
+pub const ALL: &[Kernel<()>] = &[
+    OCTA_ROUNDTRIP.erased(),
+    CLUSTER_KEYS.erased(),
+    MORTON_CODES.erased(),
+    WORKGROUP_SCAN.erased(),
+    DEBUG_VIEW.erased(),
+    PIXEL_KEYS.erased(),
+    MARK_PAGES.erased(),
+    RECORD_PAGES.erased(),
+    STORE_SLOTS.erased(),
+    COMPACT_CLUSTERS.erased(),
+    CLUSTER_LIGHT_COUNTS.erased(),
+    CLUSTER_LIGHT_FILL.erased(),
+    SHADE_CLUSTERED_DIFFUSE.erased(),
+    SHADE_CLUSTERED_SPECULAR.erased(),
+    SHADE_DEFERRED_DIFFUSE.erased(),
+    SHADE_DEFERRED_SPECULAR.erased(),
+    SCAN_ADD_OFFSETS.erased(),
+    SCAN_STORE_TOTAL.erased(),
+    RADIX_HISTOGRAM.erased(),
+    RADIX_SCATTER.erased(),
+    LIGHT_KEYS.erased(),
+    BVH_LEAVES.erased(),
+    BVH_LEVEL.erased(),
+    CLUSTER_LIGHT_COUNTS_BVH.erased(),
+    CLUSTER_LIGHT_FILL_BVH.erased(),
+    SHADE_TILED_DIFFUSE.erased(),
+    SHADE_TILED_SPECULAR.erased(),
+    AABB_BOUNDS.erased(),
+    AABB_MARK.erased(),
+    AABB_COMPACT.erased(),
+    AABB_ASSIGN.erased(),
+    SHADE_AABB_DIFFUSE.erased(),
+    SHADE_AABB_SPECULAR.erased(),
+    FORWARD_PLUS_CULL.erased(),
+    BITONIC_BLOCK_SORT.erased(),
+    BITONIC_SPLITTERS.erased(),
+    BITONIC_MERGE.erased(),
+];
+
+// Raster entry points (graphics module: `raster.rs`, `raster_forward.rs`). Fragment shaders that
+// write the normal target come as `[octahedral target, float32 target]`.
+
+/// G-buffer and forward vertex shaders: positions only / with uvs.
+pub const GBUFFER_VS: &str = "raster::gbuffer_vs";
+pub const GBUFFER_VS_UV: &str = "raster::gbuffer_vs_uv";
+/// G-buffer fragment shaders: plain, textured, alpha-tested.
+pub const GBUFFER_FS: [&str; 2] = ["raster::gbuffer_fs", "raster::gbuffer_fs_f32"];
+pub const GBUFFER_FS_TEXTURED: [&str; 2] = ["raster::gbuffer_fs_textured", "raster::gbuffer_fs_textured_f32"];
+pub const GBUFFER_FS_MASKED: [&str; 2] = ["raster::gbuffer_fs_masked", "raster::gbuffer_fs_masked_f32"];
+/// Forward+ depth pre-pass: vertex shaders (positions only / with uvs) and fragment shaders
+/// (opaque / alpha-tested).
+pub const DEPTH_VS: &str = "raster_forward::depth_vs";
+pub const DEPTH_VS_UV: &str = "raster_forward::depth_vs_uv";
+pub const DEPTH_FS: &str = "raster_forward::depth_fs";
+pub const DEPTH_FS_MASKED: &str = "raster_forward::depth_fs_masked";
+/// Forward+ shading fragment shaders: plain, textured, alpha-tested.
+pub const FORWARD_FS: &str = "raster_forward::forward_fs";
+pub const FORWARD_FS_TEXTURED: &str = "raster_forward::forward_fs_textured";
+pub const FORWARD_FS_MASKED: &str = "raster_forward::forward_fs_masked";
+
+/// Every vertex entry point of the raster module.
+pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER_VS, GBUFFER_VS_UV, DEPTH_VS, DEPTH_VS_UV];
+/// Every fragment entry point of the raster module.
+pub const FRAGMENT_ENTRIES: &[&str] = &[
+    GBUFFER_FS[0],
+    GBUFFER_FS[1],
+    GBUFFER_FS_TEXTURED[0],
+    GBUFFER_FS_TEXTURED[1],
+    GBUFFER_FS_MASKED[0],
+    GBUFFER_FS_MASKED[1],
+    DEPTH_FS,
+    DEPTH_FS_MASKED,
+    FORWARD_FS,
+    FORWARD_FS_TEXTURED,
+    FORWARD_FS_MASKED,
+];

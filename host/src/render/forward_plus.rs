@@ -17,6 +17,7 @@ use crate::vk::{Buffer, GraphicsPipeline, Image, Profiler, RasterDesc, Recorder,
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 use shaders::forward_plus::{FP_COUNTER_NODES, MAX_LIGHTS_LLVMPIPE};
+use shaders::kernels;
 use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS};
 use shaders::tiled::{MAX_TILED_TILE, MODE_TILED};
 
@@ -56,13 +57,13 @@ fn pipelines(gpu: &Gpu) -> VkResult<Pipelines> {
     let c = [COLOUR_FORMAT];
     Ok(Pipelines {
         depth: [
-            make("depth pre-pass", "raster_forward::depth_vs", "raster_forward::depth_fs", 0, 0, fwd, &c, greater, true)?,
-            make("depth pre-pass alpha-tested", "raster_forward::depth_vs_uv", "raster_forward::depth_fs_masked", 0, 2, fwd, &c, greater, true)?,
+            make("depth pre-pass", kernels::DEPTH_VS, kernels::DEPTH_FS, 0, 0, fwd, &c, greater, true)?,
+            make("depth pre-pass alpha-tested", kernels::DEPTH_VS_UV, kernels::DEPTH_FS_MASKED, 0, 2, fwd, &c, greater, true)?,
         ],
         shade: [
-            make("forward", "raster::gbuffer_vs", "raster_forward::forward_fs", 6, 0, fwd, &c, equal, false)?,
-            make("forward textured", "raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured", 6, 1, fwd, &c, equal, false)?,
-            make("forward alpha-tested", "raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked", 6, 2, fwd, &c, equal, false)?,
+            make("forward", kernels::GBUFFER_VS, kernels::FORWARD_FS, 6, 0, fwd, &c, equal, false)?,
+            make("forward textured", kernels::GBUFFER_VS_UV, kernels::FORWARD_FS_TEXTURED, 6, 1, fwd, &c, equal, false)?,
+            make("forward alpha-tested", kernels::GBUFFER_VS_UV, kernels::FORWARD_FS_MASKED, 6, 2, fwd, &c, equal, false)?,
         ],
     })
 }

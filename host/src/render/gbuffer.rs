@@ -11,6 +11,7 @@ use crate::gpu::Gpu;
 use crate::vk::image::upload_rgba8;
 use crate::vk::{Buffer, Context, GraphicsPipeline, Image, RasterDesc, Recorder, Sampler, ShaderModule, VkResult};
 use ash::vk;
+use shaders::kernels;
 use shaders::layout::{DrawParams, RasterCamera};
 use shaders::octahedral::Precision;
 
@@ -22,13 +23,13 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// The raster module (rust-gpu output of the `graphics` feature), embedded at build time.
 pub const GRAPHICS_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_GRAPHICS_SPV"));
 
-/// G-buffer pipeline variants, by what a draw's material needs: `(name, vertex, fragment,
-/// combined image samplers)`. A scene without textures binds and samples none. Each fragment
-/// entry has a float32-normal twin named `<entry>_f32`.
-pub const VARIANTS: [(&str, &str, &str, u32); 3] = [
-    ("gbuffer", "raster::gbuffer_vs", "raster::gbuffer_fs", 0),
-    ("gbuffer textured", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured", 1),
-    ("gbuffer alpha-tested", "raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked", 2),
+/// G-buffer pipeline variants, by what a draw's material needs: `(name, vertex, fragment
+/// [octahedral, float32 normal target], combined image samplers)`. A scene without textures
+/// binds and samples none.
+pub const VARIANTS: [(&str, &str, [&str; 2], u32); 3] = [
+    ("gbuffer", kernels::GBUFFER_VS, kernels::GBUFFER_FS, 0),
+    ("gbuffer textured", kernels::GBUFFER_VS_UV, kernels::GBUFFER_FS_TEXTURED, 1),
+    ("gbuffer alpha-tested", kernels::GBUFFER_VS_UV, kernels::GBUFFER_FS_MASKED, 2),
 ];
 
 /// Index into [`NORMAL_FORMATS`] and the outer index of [`pipelines`] for a `PRECISION_*`.
@@ -39,9 +40,9 @@ pub fn normal_target(precision: u32) -> usize {
 /// The G-buffer pipelines: `[normal target][variant]` (see [`normal_target`], [`VARIANTS`]).
 pub fn pipelines(ctx: &Context) -> VkResult<[[GraphicsPipeline; 3]; 2]> {
     let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
-    let make = |target: usize, (name, vertex_entry, fragment, fragment_samplers): (&str, &str, &str, u32)| {
-        let fragment_f32 = format!("{fragment}_f32");
-        let (name, fragment_entry) = if target == 1 { (format!("{name} (float32 normals)"), fragment_f32.as_str()) } else { (name.to_string(), fragment) };
+    let make = |target: usize, (name, vertex_entry, fragment, fragment_samplers): (&str, &str, [&str; 2], u32)| {
+        let name = if target == 1 { format!("{name} (float32 normals)") } else { name.to_string() };
+        let fragment_entry = fragment[target];
         GraphicsPipeline::new(
             ctx,
             &module,
