@@ -4,11 +4,10 @@
 //! holds every light touching it, and the hard cases stay finite and equal.
 mod common;
 use common::pixels::{lit, worst_channel};
-use common::render::{asset_scene, city, frame};
+use common::render::{asset_scene, city, frame, render_error};
 use host::gpu::Gpu;
 use host::render::sort::SortKind;
-use host::render::{self, reference, Frame, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::render::{reference, Frame, Settings, Technique};
 use host::scene::{lights, Scene};
 use shaders::layout::{PointLight, PRECISION_OCT16};
 
@@ -115,11 +114,8 @@ fn normal_precisions() {
         }
     }
     // A scene flattened at one precision cannot be read at another.
-    let flat = flatten(&scene, PRECISION_OCT16).unwrap();
-    let err = render::render(&gpu, &scene_input(&scene, &flat, &l), &Settings { normal_precision: PRECISION_F32, ..settings(64, 36, Technique::Deferred) })
-        .err()
-        .expect("a precision mismatch is an error");
-    assert!(format!("{err:#}").contains("precision"), "{err:#}");
+    let err = render_error(&gpu, &scene, &l, PRECISION_OCT16, &Settings { normal_precision: PRECISION_F32, ..settings(64, 36, Technique::Deferred) });
+    assert!(err.contains("precision"), "{err}");
     common::assert_clean(&gpu);
 }
 

@@ -31,6 +31,16 @@ pub fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> F
     render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{:?}: {e:#}", s.technique))
 }
 
+/// The error `render` answers for `scene` flattened at normal precision `flattened_at` and
+/// rendered with `s`; panics when it renders.
+pub fn render_error(gpu: &Gpu, scene: &Scene, lights: &[PointLight], flattened_at: u32, s: &Settings) -> String {
+    let flat = flatten(scene, flattened_at).unwrap_or_else(|e| panic!("{e:#}"));
+    match render::render(gpu, &scene_input(scene, &flat, lights), s) {
+        Ok(_) => panic!("{:?} at {}x{} with {} lights rendered; an error was expected", s.technique, s.width, s.height, lights.len()),
+        Err(e) => format!("{e:#}"),
+    }
+}
+
 /// The procedural city.
 pub fn city() -> Scene {
     Scene::load("city", &assets::dir()).unwrap_or_else(|e| panic!("{e:#}"))
