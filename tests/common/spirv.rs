@@ -30,7 +30,7 @@ pub struct EntryPoint {
 
 /// Every entry point of `module`; panics on a malformed module.
 pub fn entry_points(module: &[u8]) -> Vec<EntryPoint> {
-    assert!(module.len() % 4 == 0 && module.len() >= 20, "not a SPIR-V module ({} bytes)", module.len());
+    assert!(module.len().is_multiple_of(4) && module.len() >= 20, "not a SPIR-V module ({} bytes)", module.len());
     let words: Vec<u32> = module.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
     assert_eq!(words[0], MAGIC, "SPIR-V magic number");
     let mut entries: Vec<(u32, EntryPoint, Vec<u32>)> = Vec::new();
