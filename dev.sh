@@ -49,8 +49,8 @@ ensure_packages() {
 }
 
 first_build_notice() {
-    [ -f "$HOME/.cache/rust-gpu/codegen/0_11_0/librustc_codegen_spirv.so" ] \
-        || echo "dev.sh: first build: installing the pinned nightly and compiling the rust-gpu backend (~10 min, once)" >&2
+    [ -f "${XDG_CACHE_HOME:-$HOME/.cache}/rust-gpu/codegen/0_11_0/librustc_codegen_spirv.so" ] \
+        || echo "dev.sh: first build: installing the pinned nightly and compiling the rust-gpu backend (once; see the README's build note)" >&2
 }
 
 cmd="${1:-}"
@@ -91,6 +91,6 @@ case "$cmd" in
         ;;
     *)
         cargo build --release -p host
-        exec ./target/release/manylights "$@"
+        exec "${CARGO_TARGET_DIR:-target}/release/manylights" "$@"
         ;;
 esac

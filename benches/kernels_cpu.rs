@@ -1,6 +1,7 @@
 //! CPU throughput of the foundation kernels (the same functions the GPU runs), as an anchor for
 //! the GPU timings: `cargo bench -p host --bench kernels_cpu`. GPU timings come from
-//! `manylights render --stats` (timestamps); sorting and BVH benches join with their issue.
+//! `manylights render --stats` (timestamps); the sort and BVH benches are `benches/sort.rs` and
+//! `benches/bvh.rs`.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
 use shaders::cluster_key::{slice_bounds, ClusterGrid};

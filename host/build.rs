@@ -2,17 +2,33 @@
 //!
 //! `cargo-gpu-install` installs the pinned nightly (with rust-src, rustc-dev, llvm-tools) through
 //! rustup when it is missing and builds the `rustc_codegen_spirv` backend once into
-//! `~/.cache/rust-gpu` (≈ 10 min cold on 2 cores; seconds afterwards). The host itself stays on
-//! stable. The produced module's path reaches the host as `MANYLIGHTS_COMPUTE_SPV`
-//! (`include_bytes!`; `MANYLIGHTS_GRAPHICS_SPV` for the raster module), so the binary is self-contained and can be carried to another machine.
+//! `~/.cache/rust-gpu` (`$XDG_CACHE_HOME/rust-gpu` where that is set); afterwards a build takes
+//! seconds. [`backend::prepare`] first builds that backend against the system's SPIRV-Tools
+//! when they are installed, which spares compiling SPIRV-Tools' C++ sources (the README's
+//! "Toolchain" section has the measured cost of both). The host itself stays on stable. The
+//! produced module's path reaches the host as `MANYLIGHTS_COMPUTE_SPV` (`include_bytes!`;
+//! `MANYLIGHTS_GRAPHICS_SPV` for the raster module), so the binary is self-contained and can be
+//! carried to another machine.
 //!
 //! Two modules: compute kernels (feature `compute`, with the subgroup capabilities) and raster
 //! shaders (feature `graphics`, without them: lavapipe rejects GroupNonUniform* in vertex stages).
+#[path = "build/backend.rs"]
+mod backend;
+
+use backend::Tools;
 use cargo_gpu_install::install::Install;
 use cargo_gpu_install::spirv_builder::{Capability, ShaderPanicStrategy, SpirvMetadata};
 
 fn main() -> anyhow::Result<()> {
     let crate_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shader-crate");
+    match backend::prepare(&crate_path)? {
+        Tools::Cached => {}
+        Tools::Installed(versions) => println!("cargo::warning=rust-gpu backend built against the installed SPIRV-Tools ({versions}), cached in {}", backend::cache_dir().display()),
+        Tools::Compiled(why) => println!(
+            "cargo::warning=compiling SPIRV-Tools into the rust-gpu backend (several CPU-minutes, once; cached in {}): {why}",
+            backend::cache_dir().display()
+        ),
+    }
     let backend = Install::from_shader_crate(crate_path.clone())
         .within_build_script()
         .run()?;

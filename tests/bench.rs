@@ -1,45 +1,77 @@
 //! `manylights bench` end to end on the local device (validation on): a tiny sweep writes a CSV
-//! with the documented columns whose numbers are all finite and positive, SVG plots, and a
-//! markdown summary that names the device and the command; a technique that cannot run at a size
-//! is reported as skipped, not dropped.
-use host::bench::CSV_COLUMNS;
-use std::process::Command;
+//! with the documented columns, one configuration per technique and light count, whose numbers
+//! are all finite and positive and whose "frame" and "compute" rows are the sums of their passes;
+//! SVG plots; and a markdown summary that names the device and the command. A technique that
+//! cannot run at a size is reported as skipped, not dropped.
+mod common;
+use clap::ValueEnum;
+use common::cli::{assert_one_line_error, manylights};
+use common::csv::Csv;
+use common::temp::TempDir;
+use host::bench::{technique_name, CSV_COLUMNS, KIND_COMPUTE, KIND_RASTER, KIND_SUM, QUEUE_ASYNC, QUEUE_MAIN};
+use host::render::Technique;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Rounding of a sum of `{:.6}` cells.
+const SUM_TOLERANCE_MS: f64 = 1e-5;
 
 #[test]
 fn tiny_bench_writes_csv_plots_and_markdown() {
-    let dir = std::env::temp_dir().join(format!("manylights-bench-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
-        .args(["bench", "--lights", "100,1000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "2", "--out"])
-        .arg(&dir)
-        .env("MANYLIGHTS_VALIDATION", "true")
-        .output()
-        .expect("running manylights bench");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "bench failed:\n{err}");
-    let csv = std::fs::read_to_string(dir.join("results.csv")).expect("results.csv");
-    let mut lines = csv.lines();
-    assert_eq!(lines.next().unwrap(), CSV_COLUMNS.join(","));
-    let numeric = |c: &str| !matches!(c, "scene" | "technique" | "stage");
-    let mut rows = 0;
-    let mut techniques = std::collections::BTreeSet::new();
-    for line in lines {
-        let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells.len(), CSV_COLUMNS.len(), "row {line:?}");
-        techniques.insert(cells[1].to_string());
-        for (col, cell) in CSV_COLUMNS.iter().zip(&cells) {
-            if numeric(col) {
-                let v: f64 = cell.parse().unwrap_or_else(|_| panic!("{col} = {cell:?} is not a number (row {line:?})"));
-                assert!(v.is_finite() && v > 0.0, "{col} = {v} is not finite and positive (row {line:?})");
-            }
+    let dir = TempDir::new("bench");
+    let out = dir.path().to_str().unwrap();
+    let run = manylights(["bench", "--lights", "100,1000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "2", "--out", out]);
+    assert!(run.ok, "bench failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("results.csv"));
+    assert_eq!(csv.header, CSV_COLUMNS, "results.csv header");
+    let numeric = |c: &str| !matches!(c, "scene" | "technique" | "stage" | "queue" | "kind");
+    // (technique, lights) → stage → row.
+    let mut configs: BTreeMap<(String, u64), BTreeMap<String, common::csv::Row>> = BTreeMap::new();
+    for row in csv.rows() {
+        for col in CSV_COLUMNS.iter().filter(|c| numeric(c)) {
+            let v = row.num(col);
+            assert!(v.is_finite() && v > 0.0, "{col} = {v} is not finite and positive (row {:?})", row.cells);
         }
-        rows += 1;
+        assert_eq!((row.get("scene"), row.get("width"), row.get("height"), row.get("frames")), ("city", "96", "54", "2"), "row {:?}", row.cells);
+        assert!(row.num("min_ms") <= row.num("median_ms") && row.num("median_ms") <= row.num("max_ms"), "min ≤ median ≤ max: {:?}", row.cells);
+        let key = (row.get("technique").to_string(), row.num("lights") as u64);
+        let stage = row.get("stage").to_string();
+        let cells = row.cells.to_vec();
+        let previous = configs.entry(key).or_default().insert(stage.clone(), row);
+        assert!(previous.is_none(), "stage {stage} twice: {cells:?}");
     }
-    // Every technique at both light counts, each with its passes + frame + compute.
-    assert!(techniques.len() >= 3, "techniques in the CSV: {techniques:?}");
-    assert!(rows >= techniques.len() * 2 * 3, "{rows} rows");
+    // Every technique at both light counts: nothing is skipped at this size.
+    let expected: BTreeSet<(String, u64)> =
+        Technique::value_variants().iter().flat_map(|&t| [(technique_name(t), 100), (technique_name(t), 1000)]).collect();
+    assert_eq!(configs.keys().cloned().collect::<BTreeSet<_>>(), expected, "configurations in the CSV");
+    // Each pass row names its queue and kind: the raster passes are the G-buffer (Forward+: its
+    // depth pre-pass and forward pass), and with an async-compute queue the light sort and BVH
+    // build of clustered-bvh run there. "frame" sums the main queue's passes, "compute" the
+    // frame without raster passes.
+    let async_queue = common::gpu().ctx.async_compute_queue.is_some();
+    for ((name, lights), stages) in &configs {
+        let passes: Vec<(&String, &common::csv::Row)> = stages.iter().filter(|(_, r)| r.get("kind") != KIND_SUM).collect();
+        assert!(!passes.is_empty(), "{name} {lights}: no pass rows");
+        let raster: BTreeSet<&str> = passes.iter().filter(|(_, r)| r.get("kind") == KIND_RASTER).map(|(s, _)| s.as_str()).collect();
+        let expected_raster: BTreeSet<&str> = if name == "forward-plus" { ["depth pre-pass", "shading"].into() } else { ["gbuffer"].into() };
+        assert_eq!(raster, expected_raster, "{name} {lights}: raster passes");
+        let on_async: BTreeSet<&str> = passes.iter().filter(|(_, r)| r.get("queue") == QUEUE_ASYNC).map(|(s, _)| s.as_str()).collect();
+        let expected_async: BTreeSet<&str> =
+            if async_queue && name == "clustered-bvh" { ["morton keys", "light sort", "bvh build"].into() } else { BTreeSet::new() };
+        assert_eq!(on_async, expected_async, "{name} {lights}: async-compute passes");
+        for (stage, r) in &passes {
+            assert!([QUEUE_MAIN, QUEUE_ASYNC].contains(&r.get("queue")) && [KIND_RASTER, KIND_COMPUTE].contains(&r.get("kind")), "{stage}: {:?}", r.cells);
+        }
+        let main: Vec<&(&String, &common::csv::Row)> = passes.iter().filter(|(_, r)| r.get("queue") == QUEUE_MAIN).collect();
+        let frame: f64 = main.iter().map(|(_, r)| r.num("median_ms")).sum();
+        let compute: f64 = main.iter().filter(|(_, r)| r.get("kind") == KIND_COMPUTE).map(|(_, r)| r.num("median_ms")).sum();
+        for (stage, sum) in [("frame", frame), ("compute", compute)] {
+            let row = stages.get(stage).unwrap_or_else(|| panic!("{name} {lights}: no {stage} row"));
+            assert_eq!((row.get("queue"), row.get("kind")), (QUEUE_MAIN, KIND_SUM), "{name} {lights}: the {stage} row");
+            assert!((row.num("median_ms") - sum).abs() <= SUM_TOLERANCE_MS, "{name} {lights}: {stage} {} ≠ sum of its passes {sum}", row.num("median_ms"));
+        }
+    }
     let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
-    assert!(md.contains("**Device:**") && md.contains("bench --lights 100,1000"), "results.md names the device and the command:\n{md}");
+    assert!(md.contains("**Device:**") && md.contains("\nmanylights bench --lights 100,1000 "), "results.md names the device and the command as typed:\n{md}");
     assert!(md.contains("Speed-up at 1k lights"), "results.md has the speed-up table:\n{md}");
     for svg in ["frame-vs-lights-city.svg", "compute-vs-lights-city.svg", "stages-city.svg"] {
         let s = std::fs::read_to_string(dir.join(svg)).unwrap_or_else(|e| panic!("{svg}: {e}"));
@@ -49,22 +81,15 @@ fn tiny_bench_writes_csv_plots_and_markdown() {
 
 #[test]
 fn bench_bad_input_is_a_one_line_error() {
-    let dir = std::env::temp_dir().join(format!("manylights-bench-bad-{}", std::process::id()));
+    let dir = TempDir::new("bench-bad");
     for (args, needle) in [
         (vec!["--techniques", "warp-drive"], "unknown technique"),
         (vec!["--lights", "0"], "positive light counts"),
         (vec!["--scenes", "no-such-scene.obj"], "no-such-scene"),
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
-            .arg("bench")
-            .args(&args)
-            .args(["--width", "32", "--height", "18", "--frames", "1", "--out"])
-            .arg(&dir)
-            .output()
-            .expect("running manylights bench");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} should fail");
-        assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+        let out = dir.path().to_str().unwrap();
+        let run = manylights(["bench"].into_iter().chain(args.iter().copied()).chain(["--width", "32", "--height", "18", "--frames", "1", "--out", out]));
+        assert_one_line_error(&run, &format!("{args:?}"), needle);
     }
 }
 
@@ -74,37 +99,37 @@ fn bench_bad_input_is_a_one_line_error() {
 /// Pareto plot and markdown are written.
 #[test]
 fn tiny_accuracy_study() {
-    let dir = std::env::temp_dir().join(format!("manylights-accuracy-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
-        .args(["bench", "--study", "accuracy", "--lights", "10000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "1", "--out"])
-        .arg(&dir)
-        .env("MANYLIGHTS_VALIDATION", "true")
-        .output()
-        .expect("running manylights bench --study accuracy");
-    assert!(out.status.success(), "study failed:\n{}", String::from_utf8_lossy(&out.stderr));
-    let csv = std::fs::read_to_string(dir.join("accuracy.csv")).expect("accuracy.csv");
-    let rows: Vec<Vec<String>> = csv.lines().skip(1).map(|l| l.split(',').map(|c| c.trim_matches('"').to_string()).collect()).collect();
-    assert_eq!(rows.len(), 14, "{csv}");
-    let psnr = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap_or_else(|| panic!("{setting}")).get(3).unwrap().parse().unwrap() };
-    let max_abs = |setting: &str| -> u32 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[4].parse().unwrap() };
-    assert!(max_abs("float32") <= 1, "the reference setting reproduces brute force");
-    let normal_max_deg = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[6].parse().unwrap() };
+    let dir = TempDir::new("accuracy");
+    let out = dir.path().to_str().unwrap();
+    let run = manylights(["bench", "--study", "accuracy", "--lights", "10000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "1", "--out", out]);
+    assert!(run.ok, "study failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("accuracy.csv"));
+    assert_eq!(csv.rows.len(), 14, "{:?}", csv.rows);
+    let setting = |prefix: &str| {
+        let mut rows = csv.rows().filter(|r| r.get("setting").starts_with(prefix));
+        let row = rows.next().unwrap_or_else(|| panic!("no setting {prefix:?}"));
+        assert!(rows.next().is_none(), "several settings start with {prefix:?}");
+        row
+    };
+    let psnr = |s: &str| setting(s).num("psnr_db");
+    let max_abs = |s: &str| setting(s).num("max_abs_255");
+    let normal_max_deg = |s: &str| setting(s).num("normal_max_deg");
+    let per_cluster = |s: &str| setting(s).num("lights_per_cluster");
+    assert!(max_abs("float32") <= 1.0, "the reference setting reproduces brute force");
     assert_eq!(normal_max_deg("float32"), 0.0, "float32 normals are the reference's");
     use shaders::octahedral::Precision;
-    for (setting, p) in [("oct 2×8", Precision::Oct8), ("oct 2×12", Precision::Oct12), ("oct 2×16", Precision::Oct16)] {
+    for (s, p) in [("oct 2×8", Precision::Oct8), ("oct 2×12", Precision::Oct12), ("oct 2×16", Precision::Oct16)] {
         let bound = (p.max_angular_error_bound() as f64).to_degrees();
-        assert!(normal_max_deg(setting) <= bound + 1e-4, "{setting}: {}° over the proven bound {bound}°", normal_max_deg(setting));
+        assert!(normal_max_deg(s) <= bound + 1e-4, "{s}: {}° over the proven bound {bound}°", normal_max_deg(s));
     }
     // Per scene the error need not fall with every added bit (a normal on the 2×12 grid is not on
     // the 2×16 one), but 2×8 bits are far coarser.
     assert!(normal_max_deg("oct 2×8") > 10.0 * normal_max_deg("oct 2×16"), "2×8 bits: larger normal error than 2×16");
     for tile in ["16 px", "32 px", "64 px"] {
-        assert!(max_abs(tile) <= 1, "tile {tile}: conservative lists give the reference image");
+        assert!(max_abs(tile) <= 1.0, "tile {tile}: conservative lists give the reference image");
     }
-    let per_cluster = |setting: &str| -> f64 { rows.iter().find(|r| r[2].starts_with(setting)).unwrap()[12].parse().unwrap() };
     for test in ["sphere–AABB", "sphere–frustum planes", "exact sphere–frustum"] {
-        assert!(max_abs(test) <= 1, "culling test {test} is conservative: the reference image");
+        assert!(max_abs(test) <= 1.0, "culling test {test} is conservative: the reference image");
     }
     assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–AABB"), "the exact test keeps no more lights than the box");
     assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–frustum planes"), "the exact test keeps no more lights than the planes");

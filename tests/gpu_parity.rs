@@ -2,6 +2,7 @@
 //! with validation on. The comparison rules (bit-equal / ULP bounds / tie rule) live in
 //! `host::parity` and are shared with `manylights check`.
 mod common;
+use common::pixels::channel_diff;
 use host::debug_frame::{self, DebugView, FrameSpec, Precision};
 use host::parity;
 
@@ -67,8 +68,7 @@ fn debug_frame_matches_cpu() {
                 assert!(!g.contains(&RED) && !c.contains(&RED), "{precision:?}: an encoding error exceeds the proven bound");
                 continue;
             }
-            let channel_diff =
-                |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
+            assert_eq!(g.len(), c.len(), "{view:?}: GPU and CPU frames of different sizes");
             let differing = g.iter().zip(&c).filter(|(a, b)| channel_diff(**a, **b) > 1).count();
             assert!(differing * 200 <= g.len(), "{view:?}: {differing} of {} pixels differ by more than 1/255", g.len());
         }

@@ -3,33 +3,25 @@
 //! tonemapping), the page-table compaction equals the sorted unique keys, every pixel's list
 //! holds every light touching it, and the hard cases stay finite and equal.
 mod common;
+use common::pixels::{lit, worst_channel};
+use common::render::{asset_scene, city, frame, render_error};
 use host::gpu::Gpu;
 use host::render::sort::SortKind;
-use host::render::{self, reference, Frame, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::render::{reference, Frame, Settings, Technique};
 use host::scene::{lights, Scene};
-use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
-use std::path::PathBuf;
+use shaders::layout::{PointLight, PRECISION_OCT16};
 
-fn assets() -> PathBuf {
-    std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))
-}
-
+/// The test settings with the read-back the CPU checks need.
 fn settings(w: u32, h: u32, technique: Technique) -> Settings {
-    Settings { width: w, height: h, tile_size: 32, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: true, bvh_branching: 0, async_compute: true, sort: Default::default() }
-}
-
-fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
-    let flat = flatten(scene, s.normal_precision).unwrap();
-    render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{e:#}"))
+    Settings { read_back: true, ..common::render::settings(w, h, technique) }
 }
 
 /// Renders with the reference and both clustered techniques (naive, and BVH at branchings 32 and
 /// 64 with the radix light sort, 32 with the bitonic one) and checks
-/// everything the pipeline issues ask for; returns the naive clustered frame.
+/// what the clustered pipeline guarantees (`reference::check`: page-table compaction, complete
+/// light lists); returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
-    let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
     let mut frames = Vec::new();
     let runs = [
         (Technique::ClusteredNaive, 0, SortKind::Radix),
@@ -39,7 +31,7 @@ fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w:
     ];
     for (technique, branching, sort) in runs {
         let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, ..settings(w, h, technique) });
-        let worst = reference.pixels.iter().zip(&clustered.pixels).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0);
+        let worst = worst_channel(&reference.pixels, &clustered.pixels);
         assert!(worst <= 1, "{what}, {technique:?} (branching {branching}, {sort:?} sort): differs from deferred by {worst}/255");
         reference::check(clustered.readback.as_ref().unwrap())
             .unwrap_or_else(|e| panic!("{what}, {technique:?} (branching {branching}, {sort:?} sort): {e:#}"));
@@ -47,10 +39,6 @@ fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w:
     }
     common::assert_clean(gpu);
     frames.swap_remove(0)
-}
-
-fn city() -> Scene {
-    Scene::load("city", &assets()).unwrap()
 }
 
 #[test]
@@ -61,7 +49,7 @@ fn city_1k_and_10k_lights_equal_the_reference() {
         let l = lights::uniform(&scene, n, 7).unwrap();
         let f = assert_equal_to_reference(&gpu, &scene, &l, 192, 108, &format!("city {n}"));
         assert!(f.unique_clusters > 10 && f.light_refs > 0, "city {n}: {} clusters, {} refs", f.unique_clusters, f.light_refs);
-        let lit = f.pixels.iter().filter(|&&p| p & 0x00ff_ffff > 0x0004_0404).count();
+        let lit = lit(&f.pixels);
         assert!(lit * 4 > f.pixels.len(), "city {n}: the frame should be mostly lit, {lit} of {} pixels", f.pixels.len());
     }
 }
@@ -76,7 +64,7 @@ fn seventy_thousand_lights_all_visited() {
     assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 70k");
 }
 
-/// The top of the BVH issue's range: 100 000 lights on city and Sponza (when present), small
+/// The top of the light-count range the BVH is built for: 100 000 lights on city and Sponza, small
 /// frames so the CPU references stay quick.
 #[test]
 fn hundred_thousand_lights_city_and_sponza() {
@@ -84,8 +72,7 @@ fn hundred_thousand_lights_city_and_sponza() {
     let scene = city();
     let l = lights::uniform(&scene, 100_000, 19).unwrap();
     assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "city 100k");
-    if assets().join("sponza").exists() || std::env::var_os("MANYLIGHTS_REQUIRE_ASSETS").is_some() {
-        let scene = Scene::load("sponza", &assets()).unwrap();
+    if let Some(scene) = asset_scene("sponza") {
         let l = lights::uniform(&scene, 100_000, 23).unwrap();
         assert_equal_to_reference(&gpu, &scene, &l, 48, 27, "sponza 100k");
     }
@@ -127,11 +114,8 @@ fn normal_precisions() {
         }
     }
     // A scene flattened at one precision cannot be read at another.
-    let flat = flatten(&scene, PRECISION_OCT16).unwrap();
-    let err = render::render(&gpu, &scene_input(&scene, &flat, &l), &Settings { normal_precision: PRECISION_F32, ..settings(64, 36, Technique::Deferred) })
-        .err()
-        .expect("a precision mismatch is an error");
-    assert!(format!("{err:#}").contains("precision"), "{err:#}");
+    let err = render_error(&gpu, &scene, &l, PRECISION_OCT16, &Settings { normal_precision: PRECISION_F32, ..settings(64, 36, Technique::Deferred) });
+    assert!(err.contains("precision"), "{err}");
     common::assert_clean(&gpu);
 }
 
@@ -193,13 +177,7 @@ fn one_pixel_and_8k_frames() {
 fn bunny_and_sponza_when_present() {
     let gpu = common::gpu();
     for name in ["bunny", "sponza"] {
-        let dir = assets().join(name);
-        if !dir.exists() {
-            assert!(std::env::var_os("MANYLIGHTS_REQUIRE_ASSETS").is_none(), "{name} required but absent at {}", dir.display());
-            eprintln!("{name}: {} absent, skipped", dir.display());
-            continue;
-        }
-        let scene = Scene::load(name, &assets()).unwrap();
+        let Some(scene) = asset_scene(name) else { continue };
         for n in [1_000, 10_000] {
             let l = lights::uniform(&scene, n, 5).unwrap();
             assert_equal_to_reference(&gpu, &scene, &l, 160, 90, &format!("{name} {n}"));

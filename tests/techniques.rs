@@ -1,46 +1,22 @@
-//! The baseline techniques (issue 5: `tiled`, `tiled-2.5d`, `clustered-aabb`) on the local device
+//! The baseline techniques (`tiled`, `tiled-2.5d`, `clustered-aabb`, `forward-plus`) on the local device
 //! (lavapipe in CI), validation on: each image equals the brute-force `deferred` reference
 //! (≤ 1/255 per channel after tonemapping) on city and Sponza at 1k and 10k lights, on a view with
 //! a large depth discontinuity, and when a fixed capacity overflows (2000 coincident lights: the
 //! tiled list takes several rounds, the clustered list buffer grows and the frame re-runs).
 mod common;
+use common::pixels::{lit, worst_channel};
+use common::render::{asset_scene, city, frame, render_error};
 use host::gpu::Gpu;
-use host::render::{self, Frame, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::render::{Frame, Settings, Technique};
 use host::scene::{lights, view_camera, Scene};
-use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
-use std::path::PathBuf;
+use shaders::layout::{PointLight, PRECISION_OCT16};
 
 /// Every technique of this file.
 const TECHNIQUES: [Technique; 4] = [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb, Technique::ForwardPlus];
 
-/// Sponza, or `None` (with a note) when the shared assets are absent and not required
-/// (`MANYLIGHTS_REQUIRE_ASSETS`, which `./dev.sh test` sets when it finds them).
-fn sponza() -> Option<Scene> {
-    let dir = assets().join("sponza");
-    if !dir.exists() && std::env::var_os("MANYLIGHTS_REQUIRE_ASSETS").is_none() {
-        eprintln!("Sponza absent at {}: skipped (set MANYLIGHTS_ASSETS)", dir.display());
-        return None;
-    }
-    Some(Scene::load("sponza", &assets()).unwrap_or_else(|e| panic!("{e:#}")))
-}
-
-fn assets() -> PathBuf {
-    std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))
-}
-
+/// The test settings with `tile_size` px tiles.
 fn settings(w: u32, h: u32, technique: Technique, tile_size: u32) -> Settings {
-    Settings { bvh_branching: 0, async_compute: true, sort: Default::default(), width: w, height: h, tile_size, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: false }
-}
-
-fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
-    let flat = flatten(scene, s.normal_precision).unwrap();
-    render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{:?}: {e:#}", s.technique))
-}
-
-fn worst_channel(a: &[u32], b: &[u32]) -> u32 {
-    let channel = |a: u32, b: u32| (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
-    a.iter().zip(b).map(|(a, b)| channel(*a, *b)).max().unwrap_or(0)
+    Settings { tile_size, ..common::render::settings(w, h, technique) }
 }
 
 /// Renders the reference and every technique (16 px tiles, the tiled default of the papers) and
@@ -52,7 +28,7 @@ fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w:
 /// As [`assert_equal_to_reference`] for the given techniques.
 fn assert_equal_for(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str, techniques: &[Technique]) -> Vec<Frame> {
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred, 16));
-    let lit = reference.pixels.iter().filter(|&&p| p & 0x00ff_ffff > 0x0004_0404).count();
+    let lit = lit(&reference.pixels);
     assert!(lit * 10 > reference.pixels.len(), "{what}: the reference should be lit ({lit} of {} pixels)", reference.pixels.len());
     let frames: Vec<Frame> = techniques
         .iter()
@@ -65,10 +41,6 @@ fn assert_equal_for(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: 
         .collect();
     common::assert_clean(gpu);
     frames
-}
-
-fn city() -> Scene {
-    Scene::load("city", &assets()).unwrap()
 }
 
 /// City at 1k and 10k lights; the lists must cull (fewer references than tiles × lights).
@@ -87,7 +59,7 @@ fn city_1k_and_10k_lights_equal_the_reference() {
 
 #[test]
 fn sponza_1k_and_10k_lights_equal_the_reference() {
-    let Some(scene) = sponza() else { return };
+    let Some(scene) = asset_scene("sponza") else { return };
     let gpu = common::gpu();
     for n in [1_000, 10_000] {
         let l = lights::uniform(&scene, n, 5).unwrap();
@@ -135,7 +107,7 @@ fn depth_discontinuity_views_equal_the_reference() {
         intensity: 3.0,
     }));
     assert_discontinuity_view(&gpu, &scene, &l, "city corner");
-    let Some(mut sponza) = sponza() else { return };
+    let Some(mut sponza) = asset_scene("sponza") else { return };
     sponza.camera = view_camera("sponza", "column").unwrap();
     let l = lights::uniform(&sponza, 10_000, 23).unwrap();
     assert_discontinuity_view(&gpu, &sponza, &l, "sponza column");
@@ -193,9 +165,8 @@ fn seventy_thousand_lights_all_visited() {
     let techniques: Vec<Technique> = TECHNIQUES.iter().copied().filter(|&t| !(llvmpipe && t == Technique::ForwardPlus)).collect();
     assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &techniques);
     if llvmpipe {
-        let flat = flatten(&scene, PRECISION_OCT16).unwrap();
-        let err = render::render(&gpu, &scene_input(&scene, &flat, &l), &settings(48, 27, Technique::ForwardPlus, 16)).err().expect("forward+ must refuse 70k lights on lavapipe");
-        assert!(format!("{err:#}").contains("65535"), "{err:#}");
+        let err = render_error(&gpu, &scene, &l, PRECISION_OCT16, &settings(48, 27, Technique::ForwardPlus, 16));
+        assert!(err.contains("65535"), "forward+ must refuse 70k lights on lavapipe: {err}");
     }
 }
 

@@ -1,9 +1,12 @@
-//! The validation net itself: a clean run reports nothing, and deliberate API misuse and a
-//! deliberate synchronization hazard are caught (so "no messages" in other tests means something).
+//! The validation net itself: a clean run reports nothing, and deliberate API misuse and
+//! deliberate synchronization hazards (between copies, between dependent dispatches) are caught,
+//! so "no messages" in other tests means something; and the dispatch recorder orders dependent
+//! dispatches.
 mod common;
 use ash::vk;
-use host::vk::Buffer;
-use shaders::layout::ScanParams;
+use host::gpu::Gpu;
+use host::vk::{Buffer, ComputePipeline};
+use shaders::layout::{ScanFixParams, ScanParams};
 
 #[test]
 fn invalid_api_use_is_reported() {
@@ -37,47 +40,57 @@ fn synchronization_hazard_is_reported() {
     assert!(msgs.iter().any(|m| m.contains("SYNC-HAZARD")), "expected a SYNC-HAZARD report, got {msgs:?}");
 }
 
-/// Known gap, kept visible: the Debian layer (1.3.239) does not report a hazard between two
-/// dispatches whose buffers are bound with push descriptors. Our `Recorder` therefore serialises
-/// every dispatch with a barrier by construction. When this starts failing, the layer checks
-/// dispatch hazards too: delete the test.
+/// The recorder orders dependent dispatches, as the layer sees it: a workgroup scan writes
+/// `output` and `totals`, then `scan_add_offsets` reads `totals` and updates `output` (two steps
+/// of the device-wide scan, `render::scan`). Recorded without a barrier between them, the layer
+/// reports the read-after-write; recorded through the [`Recorder`](host::vk::Recorder), which
+/// ends every dispatch with [`dispatch_barrier`](host::vk::pipeline::dispatch_barrier), it
+/// reports nothing. This layer version does not compare two dispatches
+/// of one pipeline with the same bindings, so the pair is of two kernels.
 #[test]
-fn push_descriptor_dispatch_hazard_is_not_reported_by_this_layer() {
+fn recorder_orders_dependent_dispatches() {
     let gpu = common::gpu();
-    let k = &gpu.kernels.workgroup_scan;
+    let (scan, add) = (&gpu.kernels.workgroup_scan, &gpu.kernels.scan_add_offsets);
     let input = Buffer::from_slice(&gpu.ctx, "input", &[1u32; 256]).unwrap();
-    let out = Buffer::storage(&gpu.ctx, "output", 1024).unwrap();
+    let output = Buffer::storage(&gpu.ctx, "output", 1024).unwrap();
     let totals = Buffer::storage(&gpu.ctx, "totals", 16).unwrap();
-    let params = ScanParams { count: 256, _pad: [0; 3] };
+    let scan_params = ScanParams { count: 256, _pad: [0; 3] };
+    let add_params = ScanFixParams { count: 256, slot: 0, _pad: [0; 2] };
+    // Without a barrier: bind, push the buffers and constants, dispatch; twice.
     gpu.ctx
         .submit_and_wait(|cmd| {
-            let d = &gpu.ctx.device;
-            let infos: Vec<[vk::DescriptorBufferInfo; 1]> = [&input, &out, &totals]
-                .iter()
-                .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)])
-                .collect();
-            let writes: Vec<_> = infos
-                .iter()
-                .enumerate()
-                .map(|(i, info)| {
-                    vk::WriteDescriptorSet::default()
-                        .dst_binding(i as u32)
-                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                        .buffer_info(info)
-                })
-                .collect();
-            unsafe {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, k.raw);
-                gpu.ctx.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, k.layout, 0, &writes);
-                d.cmd_push_constants(cmd, k.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&params));
-                d.cmd_dispatch(cmd, 1, 1, 1);
-                d.cmd_dispatch(cmd, 1, 1, 1);
-            }
+            unordered_dispatch(&gpu, cmd, scan, &[&input, &output, &totals], &scan_params);
+            unordered_dispatch(&gpu, cmd, add, &[&totals, &output], &add_params);
             Ok(())
         })
         .unwrap();
     let msgs = gpu.ctx.take_validation_messages();
-    assert!(!msgs.iter().any(|m| m.contains("SYNC-HAZARD")), "the layer now reports dispatch hazards: {msgs:?}");
+    assert!(msgs.iter().any(|m| m.contains("SYNC-HAZARD-READ-AFTER-WRITE")), "unordered dependent dispatches: expected SYNC-HAZARD-READ-AFTER-WRITE, got {msgs:?}");
+    gpu.run(None, |rec| {
+        rec.dispatch(scan, &[&input, &output, &totals], &scan_params, [1, 1, 1])?;
+        rec.dispatch(add, &[&totals, &output], &add_params, [1, 1, 1])
+    })
+    .unwrap();
+    common::assert_clean(&gpu);
+}
+
+/// One dispatch as [`Recorder::dispatch`](host::vk::Recorder::dispatch) records it, without the
+/// barrier after it.
+fn unordered_dispatch<P: bytemuck::Pod>(gpu: &Gpu, cmd: vk::CommandBuffer, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P) {
+    let d = &gpu.ctx.device;
+    let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
+    let writes: Vec<_> = infos
+        .iter()
+        .enumerate()
+        .map(|(i, info)| vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(info))
+        .collect();
+    // SAFETY: the pipeline, its layout and the buffers outlive the submission, which is waited for.
+    unsafe {
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipe.raw);
+        gpu.ctx.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, pipe.layout, 0, &writes);
+        d.cmd_push_constants(cmd, pipe.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(params));
+        d.cmd_dispatch(cmd, 1, 1, 1);
+    }
 }
 
 #[test]

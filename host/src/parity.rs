@@ -68,7 +68,7 @@ fn list<T: fmt::Debug>(bad: &[T]) -> String {
     s.join("\n")
 }
 
-/// Grids of the foundation issue's hard cases: 1×1, 33×17, 4K, 8K.
+/// The hard-case grids of the foundation kernels: 1×1, 33×17, 4K, 8K.
 pub fn parity_grids() -> Vec<ClusterGrid> {
     [(1, 1), (33, 17), (3840, 2160), (7680, 4320)]
         .into_iter()

@@ -1,4 +1,4 @@
-//! CPU tests of the cluster-key functions (hard cases of the foundation issue).
+//! CPU tests of the cluster-key functions, hard cases included (1×1 and 8K grids, near/far planes).
 use super::*;
 
 const FOV: f32 = core::f32::consts::FRAC_PI_3; // 60°

@@ -1,7 +1,13 @@
-//! Typed kernel handles: the one place an entry-point name is written down (host side only).
-//! A handle carries its push-constant type `P`, the number of storage buffers the entry binds
-//! (set 0, bindings `0..storage_buffers`, in order) and its workgroup size, so the host cannot
-//! dispatch a kernel with the wrong parameters or buffer count.
+//! Typed kernel and raster handles: the one place an entry-point name is written
+//! down (host side only). A handle carries its push-constant type `P`, the number of storage
+//! buffers the entry binds (set 0, bindings `0..storage_buffers`, in order) and its workgroup
+//! size, so the host cannot dispatch a kernel with the wrong parameters or buffer count.
+//!
+//! [`ALL`], [`VERTEX_ENTRIES`] and [`FRAGMENT_ENTRIES`] list every entry point.
+//! `tests/spirv_val.rs` checks them against the built modules in both directions (every entry
+//! point of a module is listed, every listed name is an entry point of the right stage) and checks
+//! each handle's workgroup size and storage-buffer bindings against the module's declarations, so
+//! a kernel left out of a list, or a handle that disagrees with its entry, fails that test.
 use crate::layout::*;
 use core::marker::PhantomData;
 
@@ -26,6 +32,11 @@ impl<P> Kernel<P> {
     /// Invocations per workgroup.
     pub const fn invocations(&self) -> u32 {
         self.workgroup_size[0] * self.workgroup_size[1] * self.workgroup_size[2]
+    }
+
+    /// The handle without its push-constant type, for the list of every kernel ([`ALL`]).
+    pub const fn erased(&self) -> Kernel<()> {
+        Kernel::new(self.entry, self.storage_buffers, self.workgroup_size, self.cooperative)
     }
 }
 
@@ -98,6 +109,47 @@ pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
 pub const BITONIC_MERGE: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_merge", 5, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
 
+/// Every compute kernel handle (see the module doc: a test keeps this list complete).
+pub const ALL: &[Kernel<()>] = &[
+    OCTA_ROUNDTRIP.erased(),
+    CLUSTER_KEYS.erased(),
+    MORTON_CODES.erased(),
+    WORKGROUP_SCAN.erased(),
+    DEBUG_VIEW.erased(),
+    PIXEL_KEYS.erased(),
+    MARK_PAGES.erased(),
+    RECORD_PAGES.erased(),
+    STORE_SLOTS.erased(),
+    COMPACT_CLUSTERS.erased(),
+    CLUSTER_LIGHT_COUNTS.erased(),
+    CLUSTER_LIGHT_FILL.erased(),
+    SHADE_CLUSTERED_DIFFUSE.erased(),
+    SHADE_CLUSTERED_SPECULAR.erased(),
+    SHADE_DEFERRED_DIFFUSE.erased(),
+    SHADE_DEFERRED_SPECULAR.erased(),
+    SCAN_ADD_OFFSETS.erased(),
+    SCAN_STORE_TOTAL.erased(),
+    RADIX_HISTOGRAM.erased(),
+    RADIX_SCATTER.erased(),
+    LIGHT_KEYS.erased(),
+    BVH_LEAVES.erased(),
+    BVH_LEVEL.erased(),
+    CLUSTER_LIGHT_COUNTS_BVH.erased(),
+    CLUSTER_LIGHT_FILL_BVH.erased(),
+    SHADE_TILED_DIFFUSE.erased(),
+    SHADE_TILED_SPECULAR.erased(),
+    AABB_BOUNDS.erased(),
+    AABB_MARK.erased(),
+    AABB_COMPACT.erased(),
+    AABB_ASSIGN.erased(),
+    SHADE_AABB_DIFFUSE.erased(),
+    SHADE_AABB_SPECULAR.erased(),
+    FORWARD_PLUS_CULL.erased(),
+    BITONIC_BLOCK_SORT.erased(),
+    BITONIC_SPLITTERS.erased(),
+    BITONIC_MERGE.erased(),
+];
+
 /// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds
 /// `vertex_storage_buffers` storage buffers read by the vertex stage, then
 /// `fragment_storage_buffers` read by the fragment stage, then `fragment_samplers` combined image
@@ -158,4 +210,21 @@ pub const FORWARD_SHADE: [RasterKernel<ForwardParams>; 3] = [
     RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs", FORWARD_FRAGMENT_BUFFERS, 0),
     RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured", FORWARD_FRAGMENT_BUFFERS, 1),
     RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked", FORWARD_FRAGMENT_BUFFERS, 2),
+];
+
+/// Every vertex entry point of the raster module (from the handles above).
+pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex];
+/// Every fragment entry point of the raster module (from the handles above).
+pub const FRAGMENT_ENTRIES: &[&str] = &[
+    GBUFFER[0].fragment,
+    GBUFFER[1].fragment,
+    GBUFFER[2].fragment,
+    GBUFFER_F32[0].fragment,
+    GBUFFER_F32[1].fragment,
+    GBUFFER_F32[2].fragment,
+    FORWARD_DEPTH[0].fragment,
+    FORWARD_DEPTH[1].fragment,
+    FORWARD_SHADE[0].fragment,
+    FORWARD_SHADE[1].fragment,
+    FORWARD_SHADE[2].fragment,
 ];

@@ -132,7 +132,7 @@ pub struct MortonParams {
 }
 const _: () = assert!(core::mem::size_of::<MortonParams>() == 64);
 
-// ─── Clustered shading (issue 3) ─────────────────────────────────────────────────────────────
+// ─── Clustered shading ───────────────────────────────────────────────────────────────────────
 
 /// Keys per page of the virtual page table (Karas: 512-entry pages). `page = key >> PAGE_SHIFT`,
 /// `slot = key & (PAGE_SIZE − 1)`.

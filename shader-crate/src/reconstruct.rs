@@ -23,7 +23,7 @@
 //!
 //! # Position ([`view_position`])
 //!
-//! The brief's formula `(ndc_x·tan θ·aspect·d, ndc_y·tan θ·d, −d)` (θ half the vertical field of
+//! The reconstruction formula `(ndc_x·tan θ·aspect·d, ndc_y·tan θ·d, −d)` (θ half the vertical field of
 //! view, `aspect = W/H`) is evaluated in an equivalent, cancellation-free form. With the integer
 //! numerators
 //! ```text

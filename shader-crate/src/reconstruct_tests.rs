@@ -71,7 +71,7 @@ fn distance_is_monotone_in_depth() {
     }
 }
 
-/// The brief's formula in f64: `(ndc_x·tanθ·aspect·d, ndc_y·tanθ·d, −d)`.
+/// The reconstruction formula in f64: `(ndc_x·tanθ·aspect·d, ndc_y·tanθ·d, −d)`.
 fn reference(g: &ClusterGrid, px: u32, py: u32, d: f32) -> [f64; 3] {
     let (w, h) = (g.width as f64, g.height as f64);
     let t = g.tan_half_fov_y as f64;

@@ -1,6 +1,22 @@
-//! Shared test setup: every GPU test opens its own context with the Khronos validation layer and
-//! synchronization validation on, and fails if the layer reported anything.
+//! Shared test helpers. Every GPU test opens its own context with the Khronos validation layer
+//! and synchronization validation on, and fails if the layer reported anything.
+//!
+//! - [`assets`]: where Sponza and the bunny are, and what a test does without them;
+//! - [`render`]: test settings, one frame, the scenes;
+//! - [`pixels`]: frame comparison;
+//! - [`csv`]: CSV files read by column name;
+//! - [`cli`]: running the binary, one-line errors;
+//! - [`spirv`]: entry points of a SPIR-V module;
+//! - [`temp`]: per-test temporary directories.
 #![allow(dead_code)]
+pub mod assets;
+pub mod cli;
+pub mod csv;
+pub mod pixels;
+pub mod render;
+pub mod spirv;
+pub mod temp;
+
 use host::gpu::Gpu;
 use host::vk::ContextOptions;
 

@@ -17,8 +17,8 @@
 //!    breakdown, the skips.
 //!
 //! The "frame" stage is the sum of the main queue's passes (async-compute passes that overlap
-//! the raster are not added: [`crate::render::Frame::on_main_queue`]); "compute" is the frame without
-//! its raster passes ([`crate::render::Frame::is_raster`]), because a GPU may give raster work only part of the
+//! the raster are not added; each pass row says its `queue`); "compute" is the frame without its
+//! raster passes (each pass row says its `kind`), because a GPU may give raster work only part of the
 //! chip (the H100 runs it on 2 of its TPCs) — both are reported.
 pub mod accuracy;
 pub mod plots;
@@ -26,6 +26,7 @@ pub mod report;
 
 use crate::gpu::Gpu;
 use crate::render::{self, Settings, Technique};
+use crate::vk::Queue;
 use crate::render_cmd::{flatten, scene_input};
 use crate::scene::{lights, Scene};
 use anyhow::{bail, ensure, Context as _, Result};
@@ -35,10 +36,18 @@ use std::io::Write as _;
 use std::path::PathBuf;
 
 /// Columns of `results.csv`.
-pub const CSV_COLUMNS: [&str; 14] = [
-    "scene", "technique", "width", "height", "lights", "frames", "stage", "median_ms", "min_ms", "max_ms", "bytes", "light_lists",
-    "lights_per_list_mean", "lights_per_list_max",
+pub const CSV_COLUMNS: [&str; 16] = [
+    "scene", "technique", "width", "height", "lights", "frames", "stage", "queue", "kind", "median_ms", "min_ms", "max_ms", "bytes",
+    "light_lists", "lights_per_list_mean", "lights_per_list_max",
 ];
+
+/// `queue` of a pass row: the queue it ran on (the "frame" and "compute" sums: `main`).
+pub const QUEUE_MAIN: &str = "main";
+pub const QUEUE_ASYNC: &str = "async-compute";
+/// `kind` of a row: a raster pass, a compute pass (dispatches, copies), or one of the sums.
+pub const KIND_RASTER: &str = "raster";
+pub const KIND_COMPUTE: &str = "compute";
+pub const KIND_SUM: &str = "sum";
 
 /// Seconds every sweep spends warming the GPU up before its first recorded configuration.
 pub const WARM_UP_SECONDS: f64 = 10.0;
@@ -94,6 +103,10 @@ pub struct Row {
     pub lights: usize,
     pub frames: u32,
     pub stage: String,
+    /// [`QUEUE_MAIN`] or [`QUEUE_ASYNC`].
+    pub queue: &'static str,
+    /// [`KIND_RASTER`], [`KIND_COMPUTE`] or [`KIND_SUM`].
+    pub kind: &'static str,
     pub median_ms: f64,
     pub min_ms: f64,
     pub max_ms: f64,
@@ -182,7 +195,7 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         }
         _ => (frame.light_refs as f64 / light_lists.max(1) as f64, frame.max_list),
     };
-    let row = |stage: &str, median_ms: f64, min_ms: f64, max_ms: f64| Row {
+    let row = |stage: &str, queue: &'static str, kind: &'static str, median_ms: f64, min_ms: f64, max_ms: f64| Row {
         scene: name.to_string(),
         technique: t,
         width: a.width,
@@ -190,6 +203,8 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         lights: n,
         frames: a.frames,
         stage: stage.to_string(),
+        queue,
+        kind,
         median_ms,
         min_ms,
         max_ms,
@@ -198,14 +213,21 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         lights_per_list_mean,
         lights_per_list_max,
     };
-    let mut rows: Vec<Row> = frame.timings.iter().zip(&frame.timing_spread).map(|(p, &(lo, hi))| row(&p.name, p.ms, lo, hi)).collect();
-    let on_main = |p: &&Row| frame.on_main_queue(&p.stage);
+    let mut rows: Vec<Row> = frame
+        .timings
+        .iter()
+        .zip(&frame.timing_spread)
+        .map(|(p, &(lo, hi))| {
+            let queue = if p.queue == Queue::Main { QUEUE_MAIN } else { QUEUE_ASYNC };
+            row(&p.name, queue, if p.raster { KIND_RASTER } else { KIND_COMPUTE }, p.ms, lo, hi)
+        })
+        .collect();
     let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
-        rows.iter().filter(on_main).filter(|p| raster || !frame.is_raster(&p.stage)).map(f).sum()
+        rows.iter().filter(|p| p.queue == QUEUE_MAIN).filter(|p| raster || p.kind != KIND_RASTER).map(f).sum()
     };
     // Sums of medians (the per-frame sums were not kept): min and max sum the passes' extremes.
-    let frame_row = row("frame", sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
-    let compute_row = row("compute", sum(&|r| r.median_ms, false), sum(&|r| r.min_ms, false), sum(&|r| r.max_ms, false));
+    let frame_row = row("frame", QUEUE_MAIN, KIND_SUM, sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
+    let compute_row = row("compute", QUEUE_MAIN, KIND_SUM, sum(&|r| r.median_ms, false), sum(&|r| r.min_ms, false), sum(&|r| r.max_ms, false));
     rows.push(frame_row);
     rows.push(compute_row);
     Ok(rows)
@@ -271,7 +293,7 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
     for x in &r.rows {
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.4},{}",
+            "{},{},{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.4},{}",
             csv_field(&x.scene),
             technique_name(x.technique),
             x.width,
@@ -279,6 +301,8 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
             x.lights,
             x.frames,
             csv_field(&x.stage),
+            x.queue,
+            x.kind,
             x.median_ms,
             x.min_ms,
             x.max_ms,
@@ -309,9 +333,16 @@ pub fn technique_name(t: Technique) -> String {
     t.name().to_string()
 }
 
+/// The command line as a user types it, for the results: the program as `manylights` (not the
+/// path it was started from), arguments with spaces quoted.
+fn command_line() -> String {
+    let args = std::env::args().skip(1).map(|s| if s.contains(' ') { format!("'{s}'") } else { s });
+    std::iter::once("manylights".to_string()).chain(args).collect::<Vec<_>>().join(" ")
+}
+
 /// `manylights bench`: sweep, CSV, plots, markdown.
 pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
-    let command = std::env::args().map(|s| if s.contains(' ') { format!("'{s}'") } else { s }).collect::<Vec<_>>().join(" ");
+    let command = command_line();
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     if a.study == Some(Study::Accuracy) {
         let rows = accuracy::study(gpu, a)?;

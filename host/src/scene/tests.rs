@@ -1,38 +1,19 @@
 //! Loading tests: descriptions, OBJ files (written to a temporary directory), the shipped example
-//! descriptions, and Sponza / the bunny when `../shared/assets` has them.
+//! descriptions, and Sponza / the bunny from the shared assets (skipped with a note when absent,
+//! failing when `MANYLIGHTS_REQUIRE_ASSETS` is set: `tests/common/assets.rs`).
 use super::*;
 use shaders::layout::{EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
 use std::time::Instant;
 
-/// A fresh, empty directory under the system temp dir (removed on drop).
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!("manylights-scene-{tag}-{}-{n}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-
-    fn write(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+// The integration tests' helpers for the shared assets and temporary directories.
+#[path = "../../../tests/common/assets.rs"]
+mod shared_assets;
+#[path = "../../../tests/common/temp.rs"]
+mod temp;
+use temp::TempDir;
 
 fn assets() -> PathBuf {
-    std::env::var_os("MANYLIGHTS_ASSETS").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/assets")))
+    shared_assets::dir()
 }
 
 fn load_err(spec: &Path) -> String {
@@ -199,7 +180,7 @@ fn descriptions_load_and_reject_bad_input() {
 #[test]
 fn shipped_example_descriptions_load() {
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets"));
-    let mut found = 0;
+    let mut found = Vec::new();
     for entry in std::fs::read_dir(dir).unwrap() {
         let p = entry.unwrap().path();
         if p.extension().is_some_and(|e| e == "toml") {
@@ -207,10 +188,11 @@ fn shipped_example_descriptions_load() {
             assert!(!s.lights.is_empty() && s.warnings.is_empty(), "{}", p.display());
             let again = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
             assert_eq!(s.lights, again.lights, "{}: lights are seeded", p.display());
-            found += 1;
+            found.push(p.file_name().unwrap().to_string_lossy().into_owned());
         }
     }
-    assert!(found >= 3, "{found} example descriptions in assets/");
+    found.sort();
+    assert_eq!(found, ["city-1k.toml", "corridor-hotspots.toml", "corridor-surfaces.toml"], "example descriptions in assets/");
     let h = Scene::load(dir.join("corridor-hotspots.toml").to_str().unwrap(), &assets()).unwrap();
     assert!(!h.effects.specular && h.camera.fov_y_degrees == 70.0 && h.lights.len() == 4000);
 }
@@ -275,9 +257,7 @@ fn surface_lights_lie_offset_from_a_triangle() {
 
 #[test]
 fn sponza_when_present() {
-    let path = assets().join("sponza/sponza.obj");
-    if !path.exists() {
-        eprintln!("note: {} absent, Sponza test skipped", path.display());
+    if shared_assets::asset("sponza").is_none() {
         return;
     }
     let t0 = Instant::now();
@@ -295,7 +275,7 @@ fn sponza_when_present() {
     for w in &s.warnings {
         eprintln!("  warning: {w}");
     }
-    assert!(s.triangle_count() > 200_000);
+    assert_eq!(s.triangle_count(), 262_267);
     assert_eq!((s.meshes.len(), s.materials.len()), (25, 25));
     assert_eq!(s.materials.iter().filter(|m| m.albedo_texture.is_some()).count(), 24);
     assert_eq!(s.materials.iter().filter(|m| m.alpha_mask_texture.is_some()).count(), 3);
@@ -314,9 +294,7 @@ fn sponza_when_present() {
 
 #[test]
 fn bunny_when_present() {
-    let path = assets().join("bunny/bunny.obj");
-    if !path.exists() {
-        eprintln!("note: {} absent, bunny test skipped", path.display());
+    if shared_assets::asset("bunny").is_none() {
         return;
     }
     let t0 = Instant::now();

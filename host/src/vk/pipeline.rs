@@ -2,8 +2,11 @@
 //!
 //! Bindings use `VK_KHR_push_descriptor`: each dispatch pushes its storage buffers (set 0,
 //! bindings `0..n` in the order of the kernel handle), so no descriptor pools or sets are managed.
-//! Every dispatch is followed by a compute→compute/transfer memory barrier: passes are serialised,
-//! which keeps synchronization validation clean (passes that could overlap will opt out later).
+//! Every dispatch is followed by a compute→compute/transfer memory barrier ([`dispatch_barrier`]):
+//! passes are serialised, which keeps synchronization validation clean (passes that could overlap
+//! will opt out later). The validation layer does not see buffers bound with push descriptors, so
+//! it cannot check these dispatches itself; `tests/validation.rs` shows, with descriptor sets it
+//! does see, that it reports two unordered dispatches and that this barrier orders them.
 use super::context::Context;
 use super::error::{CallContext, VkError, VkResult};
 use super::memory::{barrier, Buffer};
@@ -122,6 +125,12 @@ pub fn fold(groups: u32) -> [u32; 3] {
     [gx, groups.div_ceil(gx).max(1), 1]
 }
 
+/// The barrier [`Recorder::dispatch`] records after every dispatch: the dispatch's shader writes
+/// become visible to later compute shaders and copies, which wait for it.
+pub fn dispatch_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    barrier(ctx, cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::COMPUTE_SHADER);
+}
+
 /// Records dispatches, raster passes (`draw.rs`) and profiler scopes into one command buffer.
 pub struct Recorder<'a> {
     pub ctx: &'a Context,
@@ -182,7 +191,7 @@ impl Recorder<'_> {
             }
             d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
-        barrier(self.ctx, self.cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::COMPUTE_SHADER);
+        dispatch_barrier(self.ctx, self.cmd);
         Ok(())
     }
 
