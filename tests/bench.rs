@@ -63,7 +63,7 @@ fn bench_bad_input_is_a_one_line_error() {
             .output()
             .expect("running manylights bench");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} should fail");
+        assert_eq!(out.status.code(), Some(2), "{args:?} is bad input: {err}");
         assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
     }
 }

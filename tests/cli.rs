@@ -1,14 +1,37 @@
-//! The `manylights` binary: a real render, and bad input answered by a one-line error and a
-//! non-zero exit (never a panic).
+//! The `manylights` binary: a real render, and bad input answered by a one-line error and exit
+//! status 2 (never a panic); other failures exit with 1.
 use std::process::Command;
 
-fn manylights(args: &[&str]) -> (bool, String, String) {
+/// Exit status of a run refused for its input.
+const BAD_INPUT: i32 = 2;
+
+fn run_with(args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_manylights"))
         .args(args)
         .env("MANYLIGHTS_VALIDATION", "true")
+        .envs(env.iter().copied())
         .output()
         .expect("running manylights");
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    (out.status.code(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+fn manylights(args: &[&str]) -> (bool, String, String) {
+    let (code, out, err) = run_with(args, &[]);
+    (code == Some(0), out, err)
+}
+
+/// Runs a command that must fail with `status`, and checks its stderr: no panic, exactly one
+/// line (`error: …`, after the device line), mentioning each of `needles`.
+fn refused(args: &[&str], env: &[(&str, &str)], status: i32, needles: &[&str]) {
+    let (code, _, err) = run_with(args, env);
+    assert_eq!(code, Some(status), "{args:?}: exit status\n{err}");
+    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{args:?} panicked:\n{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("device: ") && !l.starts_with("warning: ")).collect();
+    assert_eq!(lines.len(), 1, "{args:?}: one error line expected:\n{err}");
+    assert!(lines[0].starts_with("error: "), "{args:?}:\n{err}");
+    for needle in needles {
+        assert!(lines[0].contains(needle), "{args:?}: error should mention {needle:?}:\n{err}");
+    }
 }
 
 fn tmp(name: &str) -> std::path::PathBuf {
@@ -30,25 +53,35 @@ fn render_writes_a_png() {
 }
 
 #[test]
-fn bad_input_is_a_one_line_error() {
+fn debug_frame_bad_input_is_a_one_line_error_with_status_2() {
     let out = tmp("x.png");
     let o = out.to_str().unwrap();
-    let cases: &[(&[&str], &str)] = &[
-        (&["debug-frame", "--width", "0", "--out", o], "resolution 0x"),
-        (&["debug-frame", "--height", "0", "--out", o], "resolution"),
-        (&["debug-frame", "--width", "100000", "--out", o], "resolution"),
-        (&["debug-frame", "--tile-size", "0", "--out", o], "tile size 0"),
-        (&["debug-frame", "--out", "/nonexistent-dir/x.png"], "/nonexistent-dir/x.png"),
-        (&["--device", "no-such-gpu-xyz", "debug-frame", "--out", o], "no Vulkan device matches"),
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["debug-frame", "--width", "0", "--out", o], &["--width 0 is out of range"]),
+        (&["debug-frame", "--height", "0", "--out", o], &["--height 0 is out of range"]),
+        (&["debug-frame", "--width", "100000", "--out", o], &["--width 100000", "maxImageDimension2D"]),
+        (&["debug-frame", "--tile-size", "0", "--out", o], &["--tile-size 0 is out of range", "1..=1024"]),
+        (&["debug-frame", "--tile-size", "4000000000", "--out", o], &["--tile-size 4000000000"]),
+        (&["debug-frame", "--out", "/nonexistent-dir/x.png"], &["--out /nonexistent-dir/x.png", "does not exist"]),
+        (&["--device", "no-such-gpu-xyz", "debug-frame", "--out", o], &["no Vulkan device matches"]),
+        (&["debug-frame", "--view", "shaded", "--out", o], &["'shaded'", "octa-error"]),
+        (&["debug-frame", "--precision", "oct9", "--out", o], &["'oct9'", "oct16"]),
+        (&["debug-frame", "--width", "-5", "--out", o], &["--width"]),
+        (&["debug-frame", "--no-such-flag"], &["--no-such-flag"]),
     ];
-    for (args, needle) in cases {
-        let (ok, _, err) = manylights(args);
-        assert!(!ok, "{args:?} must fail");
-        assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
-        let error_lines: Vec<_> = err.lines().filter(|l| l.starts_with("error: ")).collect();
-        assert_eq!(error_lines.len(), 1, "{args:?}: one error line expected:\n{err}");
-        assert!(err.contains(needle), "{args:?}: error should mention {needle:?}:\n{err}");
+    for (args, needles) in cases {
+        refused(args, &[], BAD_INPUT, needles);
     }
+}
+
+/// The old name of the depth view still works, and a machine without Vulkan is not bad input.
+#[test]
+fn other_failures_exit_with_1() {
+    let out = tmp("slices.png");
+    let (ok, _, err) = manylights(&["debug-frame", "--view", "slices", "--width", "32", "--height", "18", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let no_vulkan = [("VK_ICD_FILENAMES", "/nonexistent/icd.json"), ("VK_DRIVER_FILES", "/nonexistent/icd.json")];
+    refused(&["debug-frame", "--out", out.to_str().unwrap()], &no_vulkan, 1, &["Vulkan"]);
 }
 
 #[test]
@@ -81,38 +114,58 @@ fn render_writes_png_and_stats() {
 }
 
 #[test]
-fn render_bad_input_is_a_one_line_error() {
+fn render_bad_input_is_a_one_line_error_with_status_2() {
     let dir = tmp("bad");
     std::fs::create_dir_all(&dir).unwrap();
-    let bad_obj = dir.join("bad.obj");
-    std::fs::write(&bad_obj, "v 0 0 0\nv 1 0 0\nf 1 2 999\n").unwrap();
-    let nan = dir.join("nan.toml");
-    std::fs::write(&nan, "geometry = \"city\"\n[[light]]\nposition = [nan, 0, 0]\nradius = 5\n").unwrap();
-    let unknown = dir.join("unknown.toml");
-    std::fs::write(&unknown, "geometry = \"city\"\nbrightness = 3\n").unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_owned()
+    };
+    let bad_obj = write("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 999\n");
+    let nan_obj = write("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+    let nan = write("nan.toml", "geometry = \"city\"\n[[light]]\nposition = [nan, 0, 0]\nradius = 5\n");
+    let unknown = write("unknown.toml", "geometry = \"city\"\nbrightness = 3\n");
+    let syntax = write("syntax.toml", "geometry = \"city\"\n[camera\n");
+    let many = write("many.toml", "geometry = \"city\"\n[lights]\ncount = 60000000\ndistribution = \"uniform\"\n");
     let out = dir.join("o.png");
     let o = out.to_str().unwrap();
-    let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["--scene", "/nonexistent/x.obj"], "scene file /nonexistent/x.obj not found"),
-        (vec!["--scene", bad_obj.to_str().unwrap()], "not a valid OBJ"),
-        (vec!["--scene", nan.to_str().unwrap()], "light 0 has a non-finite value"),
-        (vec!["--scene", unknown.to_str().unwrap()], "brightness"),
-        (vec!["--lights", "0"], "--lights 0"),
-        (vec!["--width", "0"], "--width 0"),
-        (vec!["--lights", "4000000000"], "MiB per buffer"),
-        (vec!["--scene", "nosuch"], "unknown scene \"nosuch\""),
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["--scene", "/nonexistent/x.obj"], vec!["scene file /nonexistent/x.obj not found"]),
+        (vec!["--scene", "/nonexistent/x.toml"], vec!["scene file /nonexistent/x.toml not found"]),
+        (vec!["--scene", &bad_obj], vec!["bad.obj line 3", "face position index 999"]),
+        (vec!["--scene", &nan_obj], vec!["nan.obj line 2", "not a finite"]),
+        (vec!["--scene", &nan], vec!["nan.toml", "light[0].position must be finite"]),
+        (vec!["--scene", &unknown], vec!["unknown.toml line 2, column 1", "brightness"]),
+        (vec!["--scene", &syntax], vec!["syntax.toml line 2"]),
+        (vec!["--scene", "nosuch"], vec!["unknown scene \"nosuch\""]),
+        (vec!["--lights", "0"], vec!["--lights 0"]),
+        (vec!["--width", "0"], vec!["--width 0 is out of range"]),
+        (vec!["--width", "40000"], vec!["--width 40000", "1..="]),
+        (vec!["--width", "16384", "--height", "16384"], vec!["--width 16384 --height 16384", "MiB", "maxStorageBufferRange"]),
+        (vec!["--height", "4294967295"], vec!["--height 4294967295"]),
+        (vec!["--width", "1e30"], vec!["--width", "1e30"]),
+        (vec!["--lights", "4000000000"], vec!["--lights 4000000000", "at most"]),
+        (vec!["--lights", "4294967296"], vec!["--lights", "4294967296"]),
+        (vec!["--scene", &many], vec!["many.toml", "60000000 lights", "at most"]),
+        (vec!["--technique", "tiled", "--lights", "300000"], vec!["--lights 300000", "tiled"]),
+        (vec!["--tile-size", "0"], vec!["--tile-size 0 is out of range"]),
+        (vec!["--tile-size", "100000"], vec!["--tile-size 100000 is out of range"]),
+        (vec!["--technique", "tiled", "--tile-size", "64"], vec!["--tile-size 64", "tiled"]),
+        (vec!["--frames", "1000000000"], vec!["--frames", "1000000000"]),
+        (vec!["--time", "nan"], vec!["--time NaN"]),
+        (vec!["--normal-precision", "f64"], vec!["'f64'", "oct8"]),
+        (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
+        (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
     ];
-    for (extra, needle) in cases {
-        let mut args = vec!["render", "--frames", "0", "--height", "36", "--out", o];
-        if !extra.contains(&"--width") {
-            args.extend(["--width", "64"]);
+    for (extra, needles) in cases {
+        let mut args = vec!["render", "--out", o];
+        for (flag, default) in [("--frames", "0"), ("--width", "64"), ("--height", "36")] {
+            if !extra.contains(&flag) {
+                args.extend([flag, default]);
+            }
         }
         args.extend(extra.iter().copied());
-        let (ok, _, err) = manylights(&args);
-        assert!(!ok, "{extra:?} must fail");
-        assert!(!err.contains("panicked"), "{extra:?} panicked:\n{err}");
-        let error_lines: Vec<_> = err.lines().filter(|l| l.starts_with("error: ")).collect();
-        assert_eq!(error_lines.len(), 1, "{extra:?}: one error line expected:\n{err}");
-        assert!(err.contains(needle), "{extra:?}: error should mention {needle:?}:\n{err}");
+        refused(&args, &[], BAD_INPUT, &needles);
     }
 }

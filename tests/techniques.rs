@@ -6,9 +6,10 @@
 mod common;
 use host::gpu::Gpu;
 use host::render::{self, Frame, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::scene::flatten::{flatten, scene_input};
 use host::scene::{lights, view_camera, Scene};
-use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
+use shaders::layout::{PointLight, View};
+use shaders::octahedral::Precision;
 use std::path::PathBuf;
 
 /// Every technique of this file.
@@ -30,7 +31,7 @@ fn assets() -> PathBuf {
 }
 
 fn settings(w: u32, h: u32, technique: Technique, tile_size: u32) -> Settings {
-    Settings { bvh_branching: 0, async_compute: true, sort: Default::default(), width: w, height: h, tile_size, technique, view: VIEW_SHADED, normal_precision: PRECISION_OCT16, exposure: 1.0, frames: 0, read_back: false }
+    Settings { bvh_branching: 0, async_compute: true, sort: Default::default(), width: w, height: h, tile_size, technique, view: View::Shaded, normal_precision: Precision::Oct16, exposure: 1.0, frames: 0, read_back: false }
 }
 
 fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
@@ -193,7 +194,7 @@ fn seventy_thousand_lights_all_visited() {
     let techniques: Vec<Technique> = TECHNIQUES.iter().copied().filter(|&t| !(llvmpipe && t == Technique::ForwardPlus)).collect();
     assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &techniques);
     if llvmpipe {
-        let flat = flatten(&scene, PRECISION_OCT16).unwrap();
+        let flat = flatten(&scene, Precision::Oct16).unwrap();
         let err = render::render(&gpu, &scene_input(&scene, &flat, &l), &settings(48, 27, Technique::ForwardPlus, 16)).err().expect("forward+ must refuse 70k lights on lavapipe");
         assert!(format!("{err:#}").contains("65535"), "{err:#}");
     }
@@ -208,7 +209,7 @@ fn heatmaps() {
     let scene = city();
     let l = lights::uniform(&scene, 2_000, 29).unwrap();
     let (w, h) = (96, 54);
-    let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: shaders::layout::VIEW_HEATMAP, ..settings(w, h, t, tile) }).pixels;
+    let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: View::Heatmap, ..settings(w, h, t, tile) }).pixels;
     assert_eq!(heat(Technique::ClusteredAabb, 32), heat(Technique::ClusteredNaive, 32), "clustered-aabb and clustered-naive heatmaps");
     assert_eq!(heat(Technique::ForwardPlus, 16), heat(Technique::Tiled, 16), "forward+ and tiled heatmaps");
     let background = shaders::clustered::BACKGROUND_RGBA8;
