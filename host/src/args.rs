@@ -16,12 +16,13 @@ use std::path::{Path, PathBuf};
 /// Size, cluster tile and output file of a frame (shared by `render` and `debug-frame`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct FrameArgs {
-    #[arg(long, default_value_t = 1280)]
+    // Negative numbers are read as values, so that `--width -5` is refused as a width.
+    #[arg(long, default_value_t = 1280, allow_negative_numbers = true)]
     pub width: u32,
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = 720, allow_negative_numbers = true)]
     pub height: u32,
     /// Cluster tile edge in pixels.
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
     pub tile_size: u32,
     /// Output PNG.
     #[arg(long, default_value = "frame.png")]

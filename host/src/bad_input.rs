@@ -58,9 +58,16 @@ pub fn one_line(e: &anyhow::Error) -> String {
     flatten_lines(&format!("{e:#}"))
 }
 
-/// `text` as one line: non-empty lines trimmed and joined with `; `, control characters escaped.
+/// `text` as one line: non-empty lines trimmed and joined with `; ` (a space after a colon),
+/// control characters escaped.
 pub fn flatten_lines(text: &str) -> String {
-    let joined = text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+    let mut joined = String::new();
+    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if !joined.is_empty() {
+            joined.push_str(if joined.ends_with(':') { " " } else { "; " });
+        }
+        joined.push_str(line);
+    }
     joined.chars().flat_map(|c| if c.is_control() { c.escape_default().collect::<Vec<_>>() } else { vec![c] }).collect()
 }
 
@@ -79,5 +86,6 @@ mod tests {
         let other = anyhow!("vkCreateBuffer failed").context("allocating");
         assert_eq!((is_bad_input(&other), exit_status(&other)), (false, EXIT_FAILURE));
         assert_eq!(flatten_lines("a\tb\r\n\nc\u{7}"), "a\\tb; c\\u{7}");
+        assert_eq!(flatten_lines("devices present:\n  gpu 1\n  gpu 2"), "devices present: gpu 1; gpu 2");
     }
 }

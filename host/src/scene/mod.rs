@@ -304,7 +304,8 @@ impl Scene {
         }
         for (i, m) in self.materials.iter().enumerate() {
             let unit = |v: f32| (0.0..=1.0).contains(&v);
-            if !m.albedo.into_iter().all(unit) || !unit(m.specular) || !(m.roughness > 0.0 && m.roughness <= 1.0) {
+            let in_range = m.albedo.into_iter().all(unit) && unit(m.specular) && m.roughness > 0.0 && m.roughness <= 1.0;
+            if !in_range {
                 bail!("material {i} ({:?}) is out of range: albedo and specular must be in [0, 1], roughness in (0, 1]: {m:?}", m.name);
             }
         }
