@@ -19,10 +19,11 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use host::gpu::Gpu;
 use host::render::{self, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::scene::flatten::{flatten, scene_input};
 use host::scene::{lights, Scene};
 use host::vk::ContextOptions;
-use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
+use shaders::layout::{PointLight, View};
+use shaders::octahedral::Precision;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -44,8 +45,8 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         height: 720,
         tile_size: 32,
         technique,
-        view: VIEW_SHADED,
-        normal_precision: PRECISION_OCT16,
+        view: View::Shaded,
+        normal_precision: Precision::Oct16,
         exposure: 1.0,
         frames: 1,
         read_back,
@@ -68,7 +69,7 @@ fn bvh(c: &mut Criterion) {
     eprintln!("device: {}", gpu.ctx.info.line());
     let llvmpipe = gpu.ctx.info.is_llvmpipe();
     let scene = Scene::load("city", std::path::Path::new(".")).expect("city");
-    let flat = flatten(&scene, PRECISION_OCT16).expect("flatten");
+    let flat = flatten(&scene, Precision::Oct16).expect("flatten");
     let mut g = c.benchmark_group("light assignment (city 1280x720)");
     g.sample_size(10);
     for n in sizes("MANYLIGHTS_BVH_LIGHTS", &[1_000, 10_000, 100_000, 1_000_000]) {

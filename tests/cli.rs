@@ -1,16 +1,27 @@
-//! The `manylights` binary: a real render, and bad input answered by a one-line error and a
-//! non-zero exit (never a panic).
+//! The `manylights` binary: a real render, and bad input answered by a one-line error and exit
+//! status 2 (never a panic); other failures exit with 1.
 mod common;
-use common::cli::{assert_one_line_error, manylights};
+use common::cli::{assert_refused, manylights_env, BAD_INPUT};
 use common::temp::TempDir;
+
+/// Runs a command that must fail with `status`; see [`assert_refused`].
+fn refused(args: &[&str], env: &[(&str, &str)], status: i32, needles: &[&str]) {
+    assert_refused(&manylights_env(args, env), &format!("{args:?}"), status, needles);
+}
+
+/// `(succeeded, stdout, stderr)` of `manylights <args>`.
+fn manylights(args: &[&str]) -> (bool, String, String) {
+    let r = manylights_env(args, &[]);
+    (r.ok, r.stdout, r.stderr)
+}
 
 #[test]
 fn render_writes_a_png() {
     let dir = TempDir::new("cli-png");
     let out = dir.join("clusters.png");
-    let run = manylights(["debug-frame", "--view", "clusters", "--width", "160", "--height", "90", "--out", out.to_str().unwrap()]);
-    assert!(run.ok, "render failed:\n{}", run.stderr);
-    assert!(run.stderr.contains("device: "), "stderr names the device:\n{}", run.stderr);
+    let (ok, _, err) = manylights(&["debug-frame", "--view", "clusters", "--width", "160", "--height", "90", "--out", out.to_str().unwrap()]);
+    assert!(ok, "render failed:\n{err}");
+    assert!(err.contains("device: "), "stderr names the device:\n{err}");
     let img = image::open(&out).expect("a readable PNG").to_rgba8();
     assert_eq!(img.dimensions(), (160, 90));
     let distinct: std::collections::HashSet<_> = img.pixels().map(|p| p.0).collect();
@@ -18,39 +29,55 @@ fn render_writes_a_png() {
 }
 
 #[test]
-fn bad_input_is_a_one_line_error() {
+fn debug_frame_bad_input_is_a_one_line_error_with_status_2() {
     let dir = TempDir::new("cli-bad-frame");
     let out = dir.join("x.png");
     let o = out.to_str().unwrap();
-    let cases: &[(&[&str], &str)] = &[
-        (&["debug-frame", "--width", "0", "--out", o], "resolution 0x"),
-        (&["debug-frame", "--height", "0", "--out", o], "resolution"),
-        (&["debug-frame", "--width", "100000", "--out", o], "resolution"),
-        (&["debug-frame", "--tile-size", "0", "--out", o], "tile size 0"),
-        (&["debug-frame", "--out", "/nonexistent-dir/x.png"], "/nonexistent-dir/x.png"),
-        (&["--device", "no-such-gpu-xyz", "debug-frame", "--out", o], "no Vulkan device matches"),
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["debug-frame", "--width", "0", "--out", o], &["--width 0 is out of range"]),
+        (&["debug-frame", "--height", "0", "--out", o], &["--height 0 is out of range"]),
+        (&["debug-frame", "--width", "100000", "--out", o], &["--width 100000", "maxImageDimension2D"]),
+        (&["debug-frame", "--tile-size", "0", "--out", o], &["--tile-size 0 is out of range", "1..=1024"]),
+        (&["debug-frame", "--tile-size", "4000000000", "--out", o], &["--tile-size 4000000000"]),
+        (&["debug-frame", "--out", "/nonexistent-dir/x.png"], &["--out /nonexistent-dir/x.png", "does not exist"]),
+        (&["--device", "no-such-gpu-xyz", "debug-frame", "--out", o], &["no Vulkan device matches"]),
+        (&["debug-frame", "--view", "shaded", "--out", o], &["'shaded'", "octa-error"]),
+        (&["debug-frame", "--precision", "oct9", "--out", o], &["'oct9'", "oct16"]),
+        (&["debug-frame", "--width", "-5", "--out", o], &["--width"]),
+        (&["debug-frame", "--no-such-flag"], &["--no-such-flag"]),
     ];
-    for (args, needle) in cases {
-        assert_one_line_error(&manylights(*args), &format!("{args:?}"), needle);
+    for (args, needles) in cases {
+        refused(args, &[], BAD_INPUT, needles);
     }
+}
+
+/// The old name of the depth view still works, and a machine without Vulkan is not bad input.
+#[test]
+fn other_failures_exit_with_1() {
+    let dir = TempDir::new("cli-slices");
+    let out = dir.join("slices.png");
+    let (ok, _, err) = manylights(&["debug-frame", "--view", "slices", "--width", "32", "--height", "18", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let no_vulkan = [("VK_ICD_FILENAMES", "/nonexistent/icd.json"), ("VK_DRIVER_FILES", "/nonexistent/icd.json")];
+    refused(&["debug-frame", "--out", out.to_str().unwrap()], &no_vulkan, 1, &["Vulkan"]);
 }
 
 #[test]
 fn devices_lists_at_least_one_usable_device() {
-    let run = manylights(["devices"]);
-    assert!(run.ok, "{}", run.stderr);
-    assert!(run.stdout.lines().any(|l| l.contains("subgroup") && !l.contains("unusable")), "{}", run.stdout);
+    let (ok, out, err) = manylights(&["devices"]);
+    assert!(ok, "{err}");
+    assert!(out.lines().any(|l| l.contains("subgroup") && !l.contains("unusable")), "{out}");
 }
 
 #[test]
 fn render_writes_png_and_stats() {
     let dir = TempDir::new("cli-stats");
     let (png, json) = (dir.join("city.png"), dir.join("city.json"));
-    let run = manylights([
+    let (ok, _, err) = manylights(&[
         "render", "--scene", "city", "--lights", "500", "--width", "96", "--height", "54", "--frames", "2",
         "--technique", "clustered-naive", "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
     ]);
-    assert!(run.ok, "render failed:\n{}", run.stderr);
+    assert!(ok, "render failed:\n{err}");
     let img = image::open(&png).expect("a readable PNG").to_rgba8();
     assert_eq!(img.dimensions(), (96, 54));
     let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
@@ -66,29 +93,53 @@ fn render_writes_png_and_stats() {
 }
 
 #[test]
-fn render_bad_input_is_a_one_line_error() {
+fn render_bad_input_is_a_one_line_error_with_status_2() {
     let dir = TempDir::new("cli-bad-render");
-    let bad_obj = dir.write("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 999\n");
-    let nan = dir.write("nan.toml", "geometry = \"city\"\n[[light]]\nposition = [nan, 0, 0]\nradius = 5\n");
-    let unknown = dir.write("unknown.toml", "geometry = \"city\"\nbrightness = 3\n");
+    let write = |name: &str, text: &str| dir.write(name, text).to_str().unwrap().to_owned();
+    let bad_obj = write("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 999\n");
+    let nan_obj = write("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+    let nan = write("nan.toml", "geometry = \"city\"\n[[light]]\nposition = [nan, 0, 0]\nradius = 5\n");
+    let unknown = write("unknown.toml", "geometry = \"city\"\nbrightness = 3\n");
+    let syntax = write("syntax.toml", "geometry = \"city\"\n[camera\n");
+    let many = write("many.toml", "geometry = \"city\"\n[lights]\ncount = 60000000\ndistribution = \"uniform\"\n");
     let out = dir.join("o.png");
     let o = out.to_str().unwrap();
-    let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["--scene", "/nonexistent/x.obj"], "scene file /nonexistent/x.obj not found"),
-        (vec!["--scene", bad_obj.to_str().unwrap()], "not a valid OBJ"),
-        (vec!["--scene", nan.to_str().unwrap()], "light 0 has a non-finite value"),
-        (vec!["--scene", unknown.to_str().unwrap()], "brightness"),
-        (vec!["--lights", "0"], "--lights 0"),
-        (vec!["--width", "0"], "--width 0"),
-        (vec!["--lights", "4000000000"], "MiB per buffer"),
-        (vec!["--scene", "nosuch"], "unknown scene \"nosuch\""),
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["--scene", "/nonexistent/x.obj"], vec!["scene file /nonexistent/x.obj not found"]),
+        (vec!["--scene", "/nonexistent/x.toml"], vec!["scene file /nonexistent/x.toml not found"]),
+        (vec!["--scene", &bad_obj], vec!["bad.obj line 3", "face position index 999"]),
+        (vec!["--scene", &nan_obj], vec!["nan.obj line 2", "not a finite"]),
+        (vec!["--scene", &nan], vec!["nan.toml", "light[0].position must be finite"]),
+        (vec!["--scene", &unknown], vec!["unknown.toml line 2, column 1", "brightness"]),
+        (vec!["--scene", &syntax], vec!["syntax.toml line 2"]),
+        (vec!["--scene", "nosuch"], vec!["unknown scene \"nosuch\""]),
+        (vec!["--lights", "0"], vec!["--lights 0"]),
+        (vec!["--width", "0"], vec!["--width 0 is out of range"]),
+        (vec!["--width", "40000"], vec!["--width 40000", "1..="]),
+        (vec!["--width", "16384", "--height", "16384"], vec!["--width 16384 --height 16384", "MiB", "maxStorageBufferRange"]),
+        (vec!["--height", "4294967295"], vec!["--height 4294967295"]),
+        (vec!["--width", "1e30"], vec!["--width", "1e30"]),
+        (vec!["--lights", "4000000000"], vec!["--lights 4000000000", "at most"]),
+        (vec!["--lights", "4294967296"], vec!["--lights", "4294967296"]),
+        (vec!["--scene", &many], vec!["many.toml", "60000000 lights", "at most"]),
+        (vec!["--technique", "tiled", "--lights", "300000"], vec!["--lights 300000", "tiled"]),
+        (vec!["--tile-size", "0"], vec!["--tile-size 0 is out of range"]),
+        (vec!["--tile-size", "100000"], vec!["--tile-size 100000 is out of range"]),
+        (vec!["--technique", "tiled", "--tile-size", "64"], vec!["--tile-size 64", "tiled"]),
+        (vec!["--frames", "1000000000"], vec!["--frames", "1000000000"]),
+        (vec!["--time", "nan"], vec!["--time NaN"]),
+        (vec!["--normal-precision", "f64"], vec!["'f64'", "oct8"]),
+        (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
+        (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
     ];
-    for (extra, needle) in cases {
-        let mut args = vec!["render", "--frames", "0", "--height", "36", "--out", o];
-        if !extra.contains(&"--width") {
-            args.extend(["--width", "64"]);
+    for (extra, needles) in cases {
+        let mut args = vec!["render", "--out", o];
+        for (flag, default) in [("--frames", "0"), ("--width", "64"), ("--height", "36")] {
+            if !extra.contains(&flag) {
+                args.extend([flag, default]);
+            }
         }
         args.extend(extra.iter().copied());
-        assert_one_line_error(&manylights(&args), &format!("{extra:?}"), needle);
+        refused(&args, &[], BAD_INPUT, &needles);
     }
 }

@@ -3,7 +3,9 @@
 //! `host::parity` and are shared with `manylights check`.
 mod common;
 use common::pixels::channel_diff;
-use host::debug_frame::{self, DebugView, FrameSpec, Precision};
+use host::debug_frame::{self, FrameSpec};
+use shaders::layout::View;
+use shaders::octahedral::Precision;
 use host::parity;
 
 fn check(f: impl FnOnce(&host::gpu::Gpu) -> anyhow::Result<parity::Report>) {
@@ -56,14 +58,14 @@ fn workgroup_scan_at_device_width() {
 #[test]
 fn debug_frame_matches_cpu() {
     let gpu = common::gpu();
-    for view in [DebugView::Normals, DebugView::Clusters, DebugView::Slices, DebugView::OctaError] {
+    for view in View::DEBUG {
         for precision in [Precision::Oct8, Precision::Oct12, Precision::Oct16] {
             let spec = FrameSpec { width: 97, height: 61, tile_size: 16, near: 0.1, far: 500.0, fov_y_degrees: 60.0, view, precision };
             let (g, _) = debug_frame::render_gpu(&gpu, &spec).unwrap();
             let c = debug_frame::render_cpu(&spec).unwrap();
             let background = g.iter().filter(|&&p| p == 0xff20_1818).count();
             assert!(background > 0 && background < g.len(), "{view:?}: frame must show both scene and background");
-            if view == DebugView::OctaError {
+            if view == View::OctaError {
                 const RED: u32 = 0xff00_00ff;
                 assert!(!g.contains(&RED) && !c.contains(&RED), "{precision:?}: an encoding error exceeds the proven bound");
                 continue;

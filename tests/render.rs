@@ -9,7 +9,8 @@ use host::gpu::Gpu;
 use host::render::sort::SortKind;
 use host::render::{reference, Frame, Settings, Technique};
 use host::scene::{lights, Scene};
-use shaders::layout::{PointLight, PRECISION_OCT16};
+use shaders::layout::PointLight;
+use shaders::octahedral::Precision;
 
 /// The test settings with the read-back the CPU checks need.
 fn settings(w: u32, h: u32, technique: Technique) -> Settings {
@@ -84,37 +85,35 @@ fn hundred_thousand_lights_city_and_sponza() {
 #[test]
 fn normal_precisions() {
     use clap::ValueEnum;
-    use shaders::layout::{PRECISION_F32, PRECISION_OCT12, PRECISION_OCT8};
-    use shaders::octahedral::Precision;
     let gpu = common::gpu();
     let scene = city();
     let l = lights::uniform(&scene, 500, 17).unwrap();
     let normals = |f: &Frame| f.readback.as_ref().unwrap().normals.clone();
     let depth = frame(&gpu, &scene, &l, &settings(64, 36, Technique::Deferred)).readback.unwrap().depth;
     let mut exact: Option<Vec<[f32; 3]>> = None;
-    for precision in [PRECISION_F32, PRECISION_OCT8, PRECISION_OCT12, PRECISION_OCT16] {
+    for precision in [Precision::F32, Precision::Oct8, Precision::Oct12, Precision::Oct16] {
         let s = |t| Settings { normal_precision: precision, ..settings(64, 36, t) };
         let reference = frame(&gpu, &scene, &l, &s(Technique::Deferred));
         for &t in Technique::value_variants() {
             let f = frame(&gpu, &scene, &l, &s(t));
-            assert_eq!(f.pixels, reference.pixels, "precision {precision}, {t:?}");
+            assert_eq!(f.pixels, reference.pixels, "precision {precision:?}, {t:?}");
         }
         let n = normals(&reference);
-        assert_eq!(n.len(), 64 * 36, "precision {precision}: one normal per pixel");
-        let bound = (Precision::from_u32(precision).max_angular_error_bound() as f64).to_degrees();
+        assert_eq!(n.len(), 64 * 36, "precision {precision:?}: one normal per pixel");
+        let bound = (precision.max_angular_error_bound() as f64).to_degrees();
         let exact = exact.get_or_insert_with(|| n.clone());
         let geometry: Vec<usize> = (0..n.len()).filter(|&i| f32::from_bits(depth[i]) > 0.0).collect();
         assert!(geometry.len() > 64 * 36 / 4, "the view must cover geometry");
         for i in geometry {
             let (a, b) = (glam::Vec3::from_array(n[i]).as_dvec3(), glam::Vec3::from_array(exact[i]).as_dvec3());
-            assert!((a.length() - 1.0).abs() < 1e-5, "precision {precision}, pixel {i}: |n| = {}", a.length());
+            assert!((a.length() - 1.0).abs() < 1e-5, "precision {precision:?}, pixel {i}: |n| = {}", a.length());
             let degrees = a.cross(b).length().atan2(a.dot(b)).to_degrees();
             // The bound plus the GPU's float32 rounding in the decode (≈2e-5°).
-            assert!(degrees <= bound + 1e-4, "precision {precision}, pixel {i}: {degrees}° from float32 > bound {bound}°");
+            assert!(degrees <= bound + 1e-4, "precision {precision:?}, pixel {i}: {degrees}° from float32 > bound {bound}°");
         }
     }
     // A scene flattened at one precision cannot be read at another.
-    let err = render_error(&gpu, &scene, &l, PRECISION_OCT16, &Settings { normal_precision: PRECISION_F32, ..settings(64, 36, Technique::Deferred) });
+    let err = render_error(&gpu, &scene, &l, Precision::Oct16, &Settings { normal_precision: Precision::F32, ..settings(64, 36, Technique::Deferred) });
     assert!(err.contains("precision"), "{err}");
     common::assert_clean(&gpu);
 }

@@ -9,7 +9,8 @@ use common::render::{asset_scene, city, frame, render_error};
 use host::gpu::Gpu;
 use host::render::{Frame, Settings, Technique};
 use host::scene::{lights, view_camera, Scene};
-use shaders::layout::{PointLight, PRECISION_OCT16};
+use shaders::layout::{PointLight, View};
+use shaders::octahedral::Precision;
 
 /// Every technique of this file.
 const TECHNIQUES: [Technique; 4] = [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb, Technique::ForwardPlus];
@@ -165,7 +166,7 @@ fn seventy_thousand_lights_all_visited() {
     let techniques: Vec<Technique> = TECHNIQUES.iter().copied().filter(|&t| !(llvmpipe && t == Technique::ForwardPlus)).collect();
     assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &techniques);
     if llvmpipe {
-        let err = render_error(&gpu, &scene, &l, PRECISION_OCT16, &settings(48, 27, Technique::ForwardPlus, 16));
+        let err = render_error(&gpu, &scene, &l, Precision::Oct16, &settings(48, 27, Technique::ForwardPlus, 16));
         assert!(err.contains("65535"), "forward+ must refuse 70k lights on lavapipe: {err}");
     }
 }
@@ -179,7 +180,7 @@ fn heatmaps() {
     let scene = city();
     let l = lights::uniform(&scene, 2_000, 29).unwrap();
     let (w, h) = (96, 54);
-    let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: shaders::layout::VIEW_HEATMAP, ..settings(w, h, t, tile) }).pixels;
+    let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: View::Heatmap, ..settings(w, h, t, tile) }).pixels;
     assert_eq!(heat(Technique::ClusteredAabb, 32), heat(Technique::ClusteredNaive, 32), "clustered-aabb and clustered-naive heatmaps");
     assert_eq!(heat(Technique::ForwardPlus, 16), heat(Technique::Tiled, 16), "forward+ and tiled heatmaps");
     let background = shaders::clustered::BACKGROUND_RGBA8;

@@ -1,10 +1,17 @@
 //! Command-line interface (clap). Progress and errors go to stderr; results to files/stdout.
-use crate::debug_frame::{self, DebugView, FrameSpec, Precision};
+//!
+//! Exit status: 0 on success; 2 for bad input (a malformed command line, a flag out of range or
+//! beyond the device's limits, a scene file missing or malformed: `bad_input`); 1 for any other
+//! failure. An error is always one line on stderr (`error: …`), never a panic or a backtrace.
+use crate::args::{debug_view_parser, precision_parser, FrameArgs};
+use crate::bad_input::{bad_input, flatten_lines, EXIT_BAD_INPUT};
+use crate::debug_frame::{self, FrameSpec};
 use crate::gpu::Gpu;
 use crate::vk::{self, ContextOptions};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
-use std::path::PathBuf;
+use shaders::layout::View;
+use shaders::octahedral::Precision;
 
 #[derive(Parser, Debug)]
 #[command(name = "manylights", version, about = "Many-light clustered shading research renderer (rust-gpu + Vulkan)")]
@@ -39,36 +46,29 @@ pub enum Command {
     Devices,
 }
 
-/// Size, cluster tile and output file of a frame (shared by `render` and `debug-frame`).
-#[derive(Args, Debug, Clone)]
-pub struct FrameArgs {
-    #[arg(long, default_value_t = 1280)]
-    pub width: u32,
-    #[arg(long, default_value_t = 720)]
-    pub height: u32,
-    /// Cluster tile edge in pixels.
-    #[arg(long, default_value_t = 32)]
-    pub tile_size: u32,
-    /// Output PNG.
-    #[arg(long, default_value = "frame.png")]
-    pub out: PathBuf,
-}
-
 #[derive(Args, Debug)]
 pub struct DebugFrameArgs {
     /// What to show.
-    #[arg(long, value_enum, default_value_t = DebugView::Clusters)]
-    pub view: DebugView,
+    #[arg(long, value_parser = debug_view_parser(), default_value = "clusters")]
+    pub view: View,
     /// Normal-encoding precision used by the normals / octa-error views.
-    #[arg(long, value_enum, default_value_t = Precision::Oct8)]
+    #[arg(long, value_parser = precision_parser(), default_value = "oct8")]
     pub precision: Precision,
     #[command(flatten)]
     pub frame: FrameArgs,
 }
 
 fn open(dev: &DeviceArgs) -> Result<Gpu> {
-    let gpu = Gpu::new(&ContextOptions { validation: dev.validation, device: dev.device.clone() })
-        .context("opening the Vulkan device")?;
+    let gpu = Gpu::new(&ContextOptions { validation: dev.validation, device: dev.device.clone() }).map_err(|e| {
+        // A `--device` that names no device is the user's input; no usable device at all is not.
+        let named = dev.device.is_some() && matches!(e, vk::VkError::NoMatchingDevice { .. });
+        let e = anyhow::Error::new(e).context("opening the Vulkan device");
+        if named {
+            bad_input(e)
+        } else {
+            e
+        }
+    })?;
     eprintln!("device: {}", gpu.ctx.info.line());
     Ok(gpu)
 }
@@ -100,6 +100,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::DebugFrame(a) => {
             let gpu = open(&cli.device)?;
             let f = &a.frame;
+            crate::preflight::check_frame(&gpu.ctx.info, f.width, f.height, f.tile_size, Precision::Oct8)?;
+            crate::args::check_output_dir("--out", &f.out)?;
             let spec = FrameSpec {
                 width: f.width,
                 height: f.height,
@@ -141,6 +143,22 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
             }
             Ok(())
+        }
+    }
+}
+
+/// Parses the command line. `--help` and `--version` print and exit 0; a malformed command line
+/// is one `error:` line on stderr and exit status 2.
+pub fn parse_or_exit() -> Cli {
+    match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            let text = e.render().to_string();
+            let kept: Vec<&str> = text.lines().filter(|l| !l.starts_with("Usage:") && !l.starts_with("For more information")).collect();
+            let line = flatten_lines(&kept.join("\n"));
+            eprintln!("error: {}", line.strip_prefix("error: ").unwrap_or(&line));
+            std::process::exit(EXIT_BAD_INPUT.into());
         }
     }
 }

@@ -1,55 +1,12 @@
 //! Debug frames of the analytic scene (`shaders::debug_view`): GPU render and CPU reference.
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler};
-use anyhow::{Context as _, Result};
+use crate::args::view_name;
+use anyhow::{bail, Context as _, Result};
 use shaders::cluster_key::{slice_bounds, ClusterGrid};
-use shaders::debug_view::{self, shade_pixel};
-use shaders::layout::*;
-
-/// What a debug frame shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum DebugView {
-    /// View-space normals after an encode/decode round trip.
-    Normals,
-    /// Angular error of the round trip relative to the precision's proven bound.
-    OctaError,
-    /// Cluster keys hashed to colours.
-    Clusters,
-    /// Exponential depth slices on a colour ramp.
-    Slices,
-}
-
-impl DebugView {
-    fn code(self) -> u32 {
-        match self {
-            Self::Normals => debug_view::VIEW_NORMALS,
-            Self::OctaError => debug_view::VIEW_OCTA_ERROR,
-            Self::Clusters => debug_view::VIEW_CLUSTERS,
-            Self::Slices => debug_view::VIEW_SLICES,
-        }
-    }
-}
-
-/// Normal-encoding precision.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Precision {
-    Oct8,
-    Oct12,
-    Oct16,
-    F32,
-}
-
-impl Precision {
-    pub const ALL: [Precision; 4] = [Self::Oct8, Self::Oct12, Self::Oct16, Self::F32];
-    pub fn code(self) -> u32 {
-        match self {
-            Self::Oct8 => PRECISION_OCT8,
-            Self::Oct12 => PRECISION_OCT12,
-            Self::Oct16 => PRECISION_OCT16,
-            Self::F32 => PRECISION_F32,
-        }
-    }
-}
+use shaders::debug_view::shade_pixel;
+use shaders::layout::{DebugViewParams, View};
+use shaders::octahedral::Precision;
 
 /// Camera and grid of a debug frame.
 #[derive(Clone, Copy, Debug)]
@@ -60,12 +17,16 @@ pub struct FrameSpec {
     pub near: f32,
     pub far: f32,
     pub fov_y_degrees: f32,
-    pub view: DebugView,
+    /// One of [`View::DEBUG`].
+    pub view: View,
     pub precision: Precision,
 }
 
 impl FrameSpec {
     pub fn params(&self) -> Result<(DebugViewParams, Vec<f32>)> {
+        if !View::DEBUG.contains(&self.view) {
+            bail!("view {} is not a view of the debug frame ({})", view_name(self.view), View::DEBUG.map(view_name).join(", "));
+        }
         let grid = ClusterGrid::new(self.width, self.height, self.tile_size, self.near, self.far, self.fov_y_degrees.to_radians())
             .context("cluster grid")?;
         let bounds = slice_bounds(&grid);

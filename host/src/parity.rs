@@ -37,7 +37,7 @@ impl fmt::Display for Report {
 /// Runs every parity check.
 pub fn run_all(gpu: &Gpu) -> Result<Vec<Report>> {
     let mut r = Vec::new();
-    for p in crate::debug_frame::Precision::ALL {
+    for p in shaders::octahedral::Precision::ALL {
         r.push(octahedral(gpu, p)?);
     }
     r.push(cluster_keys(gpu)?);

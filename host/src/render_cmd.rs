@@ -1,37 +1,25 @@
 //! `manylights render`: load a scene, add lights, render with a technique, write PNG (+ stats).
+//!
+//! Steps: check the flags against the device (`preflight`), load the scene (`scene`), generate
+//! lights if it has none, check its lights and textures against the device, adapt it to the
+//! renderer (`scene::flatten`), render, write the PNG and the statistics. Bad input — a flag out
+//! of range, a scene file missing or malformed, more lights than the device takes — is a
+//! one-line `BadInput` (exit status 2).
+use crate::args::{check_output_dir, frame_view_parser, precision_parser, FrameArgs};
+use crate::bail_input;
+use crate::bad_input::bad_input;
 use crate::gpu::Gpu;
-use crate::render::{self, Draw, SceneInput, Settings, Technique, TextureData};
-use crate::scene::{lights, Scene, TextureKind};
-use anyhow::{bail, Context as _, Result};
-use shaders::layout::{DrawParams, MaterialGpu, PointLight};
+use crate::preflight;
+use crate::render::{self, Settings, Technique};
+use crate::scene::flatten::{flatten, scene_input};
+use crate::scene::{description, lights, Scene};
+use anyhow::{Context as _, Result};
+use shaders::layout::View;
+use shaders::octahedral::Precision;
 use std::path::PathBuf;
 
-/// What the frame shows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum View {
-    Shaded,
-    /// Lights evaluated per pixel on a colour ramp (0 black … 64+ white; legend below the frame).
-    Heatmap,
-    /// Cluster keys hashed to colours.
-    Clusters,
-    /// Decoded G-buffer normals.
-    Normals,
-    /// Exponential depth slices on a colour ramp.
-    Depth,
-}
-
-impl View {
-    pub fn code(self) -> u32 {
-        use shaders::layout::*;
-        match self {
-            Self::Shaded => VIEW_SHADED,
-            Self::Heatmap => VIEW_HEATMAP,
-            Self::Clusters => VIEW_CLUSTERS,
-            Self::Normals => VIEW_NORMALS,
-            Self::Depth => VIEW_DEPTH,
-        }
-    }
-}
+/// Most timed frames `--frames` takes.
+pub const MAX_FRAMES: u32 = 100_000;
 
 /// Arguments of `render` (see `manylights render --help`).
 #[derive(clap::Args, Debug, Clone)]
@@ -46,21 +34,22 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Technique::ClusteredNaive)]
     pub technique: Technique,
     #[command(flatten)]
-    pub frame: crate::cli::FrameArgs,
+    pub frame: FrameArgs,
     /// Write statistics (device, per-pass GPU ms, bytes, clusters, lights per cluster/pixel) here.
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// Timed frames after the warm-up (per-pass median).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=MAX_FRAMES as i64))]
     pub frames: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    #[arg(long, value_enum, default_value_t = View::Shaded)]
+    /// What the frame shows.
+    #[arg(long, value_parser = frame_view_parser(), default_value = "shaded")]
     pub view: View,
     /// Encoding of the G-buffer normals: octahedral 2×8, 2×12 or 2×16 bits in a 32-bit target, or
     /// float32 components in a 128-bit one.
-    #[arg(long, value_enum, default_value_t = NormalPrecision::Oct16)]
-    pub normal_precision: NormalPrecision,
+    #[arg(long, value_parser = precision_parser(), default_value = "oct16")]
+    pub normal_precision: Precision,
     /// Children per light-BVH node for `clustered-bvh`: 32 or 64 (default: the subgroup width,
     /// clamped to 32..=64).
     #[arg(long, value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["32", "64"]), |s: String| s.parse::<u32>().unwrap_or(0)))]
@@ -80,150 +69,80 @@ pub struct RenderArgs {
     pub assets: PathBuf,
 }
 
-/// G-buffer normal encodings (see `shaders::octahedral` for their error bounds).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum NormalPrecision {
-    Oct8,
-    Oct12,
-    Oct16,
-    /// Three float32 components (a 16-byte normal target): lossless, the accuracy reference.
-    F32,
-}
-
-impl NormalPrecision {
-    pub fn code(self) -> u32 {
-        use shaders::layout::*;
-        match self {
-            Self::Oct8 => PRECISION_OCT8,
-            Self::Oct12 => PRECISION_OCT12,
-            Self::Oct16 => PRECISION_OCT16,
-            Self::F32 => PRECISION_F32,
-        }
-    }
-}
-
-/// Merged geometry, materials and draws of a scene.
-pub struct Flattened {
-    pub positions: Vec<[f32; 3]>,
-    pub normals: Vec<[f32; 3]>,
-    pub uvs: Vec<[f32; 2]>,
-    pub indices: Vec<u32>,
-    pub draws: Vec<Draw>,
-    pub materials: Vec<MaterialGpu>,
-}
-
-/// Merges a scene's meshes into one vertex/index set with one draw per mesh.
-pub fn flatten(scene: &Scene, normal_precision: u32) -> Result<Flattened> {
-    let mut f = Flattened { positions: vec![], normals: vec![], uvs: vec![], indices: vec![], draws: vec![], materials: vec![] };
-    for m in &scene.materials {
-        f.materials.push(MaterialGpu { specular: m.specular, roughness: m.roughness, _pad: [0.0; 2] });
-    }
-    if f.materials.is_empty() {
-        f.materials.push(MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] });
-    }
-    if f.materials.len() > shaders::layout::MAX_MATERIALS as usize {
-        bail!("scene has {} materials; the G-buffer addresses at most {}", f.materials.len(), shaders::layout::MAX_MATERIALS);
-    }
-    for mesh in &scene.meshes {
-        let base = f.positions.len() as u32;
-        let first_index = f.indices.len() as u32;
-        f.positions.extend_from_slice(&mesh.positions);
-        f.normals.extend_from_slice(&mesh.normals);
-        f.uvs.extend_from_slice(&mesh.uvs);
-        f.indices.extend(mesh.indices.iter().map(|i| i + base));
-        let material = (mesh.material as usize).min(f.materials.len() - 1);
-        let m = scene.materials.get(material);
-        let albedo = m.map(|m| m.albedo).unwrap_or([0.8; 3]);
-        // Textures only where the scene's effects call for them (no sampling otherwise).
-        let texture = |path: Option<&std::path::PathBuf>| {
-            path.and_then(|p| scene.textures.iter().position(|t| &t.path == p)).map(|i| i as u32)
-        };
-        let albedo_texture = if scene.effects.textures { texture(m.and_then(|m| m.albedo_texture.as_ref())) } else { None };
-        let mask_texture = if scene.effects.alpha_test { texture(m.and_then(|m| m.alpha_mask_texture.as_ref())) } else { None };
-        f.draws.push(Draw {
-            first_index,
-            index_count: mesh.indices.len() as u32,
-            params: DrawParams { albedo, material: material as u32, normal_precision, _pad: [0; 3] },
-            albedo_texture,
-            mask_texture,
-        });
-    }
-    Ok(f)
-}
-
-/// The renderer's view of a scene and its lights.
-pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [PointLight]) -> SceneInput<'a> {
-    let c = &scene.camera;
-    SceneInput {
-        positions: &flat.positions,
-        normals: &flat.normals,
-        uvs: &flat.uvs,
-        indices: &flat.indices,
-        draws: flat.draws.clone(),
-        materials: flat.materials.clone(),
-        lights,
-        textures: scene
-            .textures
-            .iter()
-            .map(|t| TextureData { width: t.width, height: t.height, rgba8: &t.rgba8, srgb: t.kind == TextureKind::Albedo })
-            .collect(),
-        view: c.view(),
-        fov_y_radians: c.fov_y_degrees.to_radians(),
-        near: c.near,
-        far: c.far,
-        effects: scene.effects.flags(),
-    }
-}
-
-/// Checks what can be checked before loading anything: sizes and whether the lights fit.
+/// Checks what can be checked before loading anything: the frame's size and tile against the
+/// grid's and the device's limits, `--lights` against what the technique takes on the device,
+/// and the output's directory.
 pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
-    let max = shaders::cluster_key::MAX_DIMENSION;
-    if a.frame.width == 0 || a.frame.height == 0 || a.frame.width > max || a.frame.height > max {
-        bail!("--width {} --height {}: both must be in 1..={max}", a.frame.width, a.frame.height);
+    let info = &gpu.ctx.info;
+    let f = &a.frame;
+    preflight::check_frame(info, f.width, f.height, f.tile_size, a.normal_precision)?;
+    preflight::check_tile_for(a.technique, f.tile_size)?;
+    preflight::check_lights(info, a.technique, f.tile_size, a.lights as u64, &format!("--lights {}", a.lights))?;
+    check_output_dir("--out", &f.out)?;
+    if let Some(stats) = &a.stats {
+        check_output_dir("--stats", stats)?;
     }
-    let bytes = a.lights as u64 * std::mem::size_of::<PointLight>() as u64;
-    let limit = gpu.ctx.info.max_storage_buffer_range as u64;
-    if bytes > limit {
-        bail!(
-            "--lights {} needs {} MiB for the light buffer; {} addresses at most {} MiB per buffer",
-            a.lights,
-            bytes >> 20,
-            gpu.ctx.info.name,
-            limit >> 20
-        );
+    if let Some(t) = a.time.filter(|t| !t.is_finite()) {
+        bail_input!("--time {t} is not a finite number of seconds");
     }
     Ok(())
 }
 
+/// Checks a loaded scene against the device: its light count (from a description) and its
+/// textures' sizes.
+fn check_scene(gpu: &Gpu, a: &RenderArgs, scene: &Scene) -> Result<()> {
+    let info = &gpu.ctx.info;
+    let what = format!("scene {:?}", a.scene);
+    preflight::check_lights(info, a.technique, a.frame.tile_size, scene.lights.len() as u64, &what)?;
+    let max = info.max_image_dimension_2d;
+    if let Some(t) = scene.textures.iter().find(|t| t.width > max || t.height > max) {
+        bail_input!("{what}: texture {} is {}x{}; {} takes textures of at most {max}x{max} (maxImageDimension2D)", t.path.display(), t.width, t.height, info.name);
+    }
+    Ok(())
+}
+
+/// A description's light count against the device, before its lights are generated (a file
+/// asking for 60 million lights is refused at once, not after building them).
+fn check_description(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
+    let path = std::path::Path::new(&a.scene);
+    if !a.scene.to_ascii_lowercase().ends_with(".toml") || !path.is_file() {
+        return Ok(());
+    }
+    // A file that does not parse is reported by `Scene::load`, with its line.
+    let parsed = std::fs::read_to_string(path).map_err(anyhow::Error::from).and_then(|text| description::parse(&text, path));
+    match parsed {
+        Ok(d) => preflight::check_lights(&gpu.ctx.info, a.technique, a.frame.tile_size, d.light_count() as u64, &format!("scene {:?}", a.scene)),
+        Err(_) => Ok(()),
+    }
+}
+
 pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     check_args(gpu, a)?;
+    check_description(gpu, a)?;
     let mut scene = Scene::load(&a.scene, &a.assets).with_context(|| format!("loading scene {:?}", a.scene))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
     if scene.lights.is_empty() {
         if a.lights == 0 {
-            bail!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
+            bail_input!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
         }
-        scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).context("generating lights")?;
+        scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?;
     }
     if let Some(t) = a.time {
-        if !t.is_finite() {
-            bail!("--time {t} is not a finite number of seconds");
-        }
         scene.lights = lights::animate(&scene.lights, t);
     }
-    scene.validate().context("scene")?;
-    let precision = a.normal_precision.code();
-    let flat = flatten(&scene, precision)?;
+    scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
+    check_scene(gpu, a, &scene)?;
+    let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
     let input = scene_input(&scene, &flat, &scene.lights);
     let settings = Settings {
         width: a.frame.width,
         height: a.frame.height,
         tile_size: a.frame.tile_size,
         technique: a.technique,
-        view: a.view.code(),
-        normal_precision: precision,
+        view: a.view,
+        normal_precision: a.normal_precision,
         exposure: 1.0,
         frames: a.frames,
         read_back: a.stats.is_some(),

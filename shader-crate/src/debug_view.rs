@@ -18,10 +18,11 @@ use crate::layout::DebugViewParams;
 use crate::octahedral;
 use glam::{vec3, Vec3};
 
-pub const VIEW_NORMALS: u32 = 0;
-pub const VIEW_OCTA_ERROR: u32 = 1;
-pub const VIEW_CLUSTERS: u32 = 2;
-pub const VIEW_SLICES: u32 = 3;
+// The frame's view codes (`layout::View`): one code space for every kernel.
+pub const VIEW_NORMALS: u32 = crate::layout::VIEW_NORMALS;
+pub const VIEW_OCTA_ERROR: u32 = crate::layout::VIEW_OCTA_ERROR;
+pub const VIEW_CLUSTERS: u32 = crate::layout::VIEW_CLUSTERS;
+pub const VIEW_SLICES: u32 = crate::layout::VIEW_DEPTH;
 
 const GROUND_DEPTH_BELOW_EYE: f32 = 1.5;
 const SPHERE_ROWS: u32 = 14;

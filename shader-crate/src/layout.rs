@@ -110,7 +110,7 @@ const _: () = assert!(core::mem::size_of::<ScanParams>() == 16);
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
 pub struct DebugViewParams {
     pub grid: ClusterGrid,
-    /// One of `debug_view::VIEW_*`.
+    /// `VIEW_*` code of a [`View::DEBUG`] view.
     pub view: u32,
     /// One of `PRECISION_*`.
     pub precision: u32,
@@ -255,6 +255,36 @@ pub const VIEW_CLUSTERS: u32 = 2;
 pub const VIEW_NORMALS: u32 = 3;
 /// Depth slice `k / S` on a colour ramp.
 pub const VIEW_DEPTH: u32 = 4;
+/// Angular error of the normal encoding's round trip over its proven bound (debug frame only).
+pub const VIEW_OCTA_ERROR: u32 = 5;
+
+/// What a frame shows. One code space serves the shading passes (`FrameParams::view`,
+/// [`View::FRAME`]) and the analytic debug frame (`DebugViewParams::view`, [`View::DEBUG`]):
+/// each discriminant is the kernel's `VIEW_*` constant.
+#[derive(Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Debug))]
+#[repr(u32)]
+pub enum View {
+    Shaded = VIEW_SHADED,
+    Heatmap = VIEW_HEATMAP,
+    Clusters = VIEW_CLUSTERS,
+    Normals = VIEW_NORMALS,
+    Depth = VIEW_DEPTH,
+    OctaError = VIEW_OCTA_ERROR,
+}
+
+impl View {
+    /// Views the shading passes of a rendered frame produce.
+    pub const FRAME: [View; 5] = [View::Shaded, View::Heatmap, View::Clusters, View::Normals, View::Depth];
+    /// Views of the analytic debug frame (`debug_view`).
+    pub const DEBUG: [View; 4] = [View::Normals, View::OctaError, View::Clusters, View::Depth];
+
+    /// The kernel constant (`VIEW_*`).
+    #[inline]
+    pub const fn code(self) -> u32 {
+        self as u32
+    }
+}
 
 /// Slots of the `counters` buffer of the clustered chain.
 pub const COUNTER_UNIQUE_CLUSTERS: u32 = 0;

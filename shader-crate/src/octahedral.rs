@@ -187,6 +187,12 @@ impl Precision {
         }
     }
 
+    /// The kernel constant (`layout::PRECISION_*`), as `FrameParams`/`DrawParams` carry it.
+    #[inline]
+    pub const fn code(self) -> u32 {
+        self as u32
+    }
+
     /// Bits per component: 8, 12, 16 or 32.
     #[inline]
     pub const fn bits(self) -> u32 {

@@ -2,9 +2,10 @@
 use super::assets;
 use host::gpu::Gpu;
 use host::render::{self, Frame, Settings, Technique};
-use host::render_cmd::{flatten, scene_input};
+use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
-use shaders::layout::{PointLight, PRECISION_OCT16, VIEW_SHADED};
+use shaders::layout::{PointLight, View};
+use shaders::octahedral::Precision;
 
 /// One untimed frame (`frames: 0`) at `width`×`height`: 32 px tiles, octahedral 2×16 normals,
 /// the shaded view, no read-back. Tests change fields with `..settings(..)`.
@@ -14,8 +15,8 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         height,
         tile_size: 32,
         technique,
-        view: VIEW_SHADED,
-        normal_precision: PRECISION_OCT16,
+        view: View::Shaded,
+        normal_precision: Precision::Oct16,
         exposure: 1.0,
         frames: 0,
         read_back: false,
@@ -33,7 +34,7 @@ pub fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> F
 
 /// The error `render` answers for `scene` flattened at normal precision `flattened_at` and
 /// rendered with `s`; panics when it renders.
-pub fn render_error(gpu: &Gpu, scene: &Scene, lights: &[PointLight], flattened_at: u32, s: &Settings) -> String {
+pub fn render_error(gpu: &Gpu, scene: &Scene, lights: &[PointLight], flattened_at: Precision, s: &Settings) -> String {
     let flat = flatten(scene, flattened_at).unwrap_or_else(|e| panic!("{e:#}"));
     match render::render(gpu, &scene_input(scene, &flat, lights), s) {
         Ok(_) => panic!("{:?} at {}x{} with {} lights rendered; an error was expected", s.technique, s.width, s.height, lights.len()),

@@ -22,11 +22,12 @@
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
 use crate::render::{self, Frame, Settings, Technique};
-use crate::render_cmd::{flatten, scene_input};
+use crate::scene::flatten::{flatten, scene_input};
 use crate::scene::{lights, Scene};
 use anyhow::{Context as _, Result};
 use plotters::prelude::*;
 use shaders::layout::*;
+use shaders::octahedral::Precision;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -87,13 +88,13 @@ pub fn normal_error(reference: &Frame, f: &Frame) -> Option<(f64, f64)> {
     (n > 0).then(|| (max, sum / n as f64))
 }
 
-fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: u32) -> Settings {
+fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Precision) -> Settings {
     Settings {
         width: a.width,
         height: a.height,
         tile_size,
         technique,
-        view: VIEW_SHADED,
+        view: View::Shaded,
         normal_precision: precision,
         exposure: 1.0,
         frames: a.frames,
@@ -129,9 +130,9 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     for name in &a.scenes {
         let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
-        let flat = flatten(&scene, PRECISION_OCT16)?;
+        let flat = flatten(&scene, Precision::Oct16)?;
         let run = |ls: &[shaders::layout::PointLight], effects: u32, s: &Settings| -> Result<Frame> {
-            let flat_p = if s.normal_precision == PRECISION_OCT16 { None } else { Some(flatten(&scene, s.normal_precision)?) };
+            let flat_p = if s.normal_precision == Precision::Oct16 { None } else { Some(flatten(&scene, s.normal_precision)?) };
             let mut input = scene_input(&scene, flat_p.as_ref().unwrap_or(&flat), ls);
             input.effects |= effects;
             bar.inc(1);
@@ -157,25 +158,25 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
             });
         };
         // 1: reference = brute force, float32 normals, window falloff.
-        let exact = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, PRECISION_F32))?;
-        for (p, label) in [(PRECISION_OCT8, "oct 2×8"), (PRECISION_OCT12, "oct 2×12"), (PRECISION_OCT16, "oct 2×16"), (PRECISION_F32, "float32")] {
+        let exact = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::F32))?;
+        for (p, label) in [(Precision::Oct8, "oct 2×8"), (Precision::Oct12, "oct 2×12"), (Precision::Oct16, "oct 2×16"), (Precision::F32, "float32")] {
             let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, a.tile_size, p))?;
             measure("normal encoding", label.into(), &exact, &f, normal_error(&exact, &f));
         }
         // 3: reference = brute force, 2×16-bit normals (as the rows), window falloff.
-        let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, PRECISION_OCT16))?;
+        let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
         for (effect, label) in [(0, "sphere–AABB"), (EFFECT_CULL_PLANES, "sphere–frustum planes"), (EFFECT_CULL_EXACT, "exact sphere–frustum")] {
-            let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, PRECISION_OCT16))?;
+            let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, Precision::Oct16))?;
             measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
         }
         for tile in [16, 32, 64] {
-            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, PRECISION_OCT16))?;
+            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, Precision::Oct16))?;
             measure("tile size", format!("{tile} px ({} slices)", f.grid.num_slices), &reference, &f, None);
         }
         // 2: reference = brute force with the uncut inverse square.
         let uncut: Vec<_> = base.iter().map(|l| PointLight { radius: 1e30, ..*l }).collect();
-        let s = settings(a, Technique::ClusteredBvh, a.tile_size, PRECISION_OCT16);
-        let reference = run(&uncut, EFFECT_INVERSE_SQUARE_CUT, &settings(a, Technique::Deferred, a.tile_size, PRECISION_OCT16))?;
+        let s = settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16);
+        let reference = run(&uncut, EFFECT_INVERSE_SQUARE_CUT, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
         let f = run(&base, 0, &s)?;
         measure("falloff", "Karis window (scene radii)".into(), &reference, &f, None);
         for eps in [1e-2f32, 1e-3, 1e-4] {

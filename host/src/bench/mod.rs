@@ -26,12 +26,13 @@ pub mod report;
 
 use crate::gpu::Gpu;
 use crate::render::{self, Settings, Technique};
+use crate::scene::flatten::{flatten, scene_input};
 use crate::vk::Queue;
-use crate::render_cmd::{flatten, scene_input};
 use crate::scene::{lights, Scene};
 use anyhow::{bail, ensure, Context as _, Result};
 use clap::{Args, ValueEnum};
-use shaders::layout::{PRECISION_OCT16, VIEW_SHADED};
+use shaders::layout::View;
+use shaders::octahedral::Precision;
 use std::io::Write as _;
 use std::path::PathBuf;
 
@@ -143,7 +144,10 @@ pub fn parse_techniques(s: &str) -> Result<Vec<Technique>> {
         return Ok(Technique::value_variants().to_vec());
     }
     s.split(',')
-        .map(|t| Technique::from_str(t.trim(), true).map_err(|_| anyhow::anyhow!("unknown technique {t:?} (try `all`, or see `manylights render --help`)")))
+        .map(|t| {
+            Technique::from_str(t.trim(), true)
+                .map_err(|_| crate::bad_input::bad_input(anyhow::anyhow!("--techniques: unknown technique {t:?} (try `all`, or see `manylights render --help`)")))
+        })
         .collect()
 }
 
@@ -164,14 +168,14 @@ pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool) -
 /// Renders one configuration and turns its passes into rows.
 pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
     let l = lights::uniform(scene, n, a.seed).context("generating lights")?;
-    let flat = flatten(scene, PRECISION_OCT16)?;
+    let flat = flatten(scene, Precision::Oct16)?;
     let s = Settings {
         width: a.width,
         height: a.height,
         tile_size: a.tile_size,
         technique: t,
-        view: VIEW_SHADED,
-        normal_precision: PRECISION_OCT16,
+        view: View::Shaded,
+        normal_precision: Precision::Oct16,
         exposure: 1.0,
         frames: a.frames,
         read_back: true,
@@ -236,9 +240,15 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
 /// The sweep (step 1); progress on stderr.
 pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
     let techniques = parse_techniques(&a.techniques)?;
-    ensure!(!a.lights.is_empty() && a.lights.iter().all(|&n| n > 0), "--lights needs positive light counts");
-    ensure!(!a.scenes.is_empty(), "--scenes is empty");
-    ensure!(a.frames > 0, "--frames must be at least 1");
+    if a.lights.is_empty() || a.lights.contains(&0) {
+        crate::bail_input!("--lights needs positive light counts");
+    }
+    if a.scenes.is_empty() {
+        crate::bail_input!("--scenes is empty");
+    }
+    if a.frames == 0 {
+        crate::bail_input!("--frames must be at least 1");
+    }
     let cpu_driver = gpu.ctx.info.is_llvmpipe();
     let total = (a.scenes.len() * a.lights.len() * techniques.len()) as u64;
     let bar = indicatif::ProgressBar::new(total).with_style(
@@ -342,6 +352,9 @@ fn command_line() -> String {
 
 /// `manylights bench`: sweep, CSV, plots, markdown.
 pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
+    // The accuracy study's reference reads float32 normals: the widest G-buffer.
+    let widest = if a.study.is_some() { Precision::F32 } else { Precision::Oct16 };
+    crate::preflight::check_frame(&gpu.ctx.info, a.width, a.height, a.tile_size, widest)?;
     let command = command_line();
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     if a.study == Some(Study::Accuracy) {

@@ -15,7 +15,6 @@
 //!   difference is a common scale, so the *directions* differ by ≤ 2u: [`DIRECTION_RAD`].
 //!   Decode is compared on the GPU's own codes, so a tie in encode cannot leak into it.
 use super::{list, ulp_distance, Report};
-use crate::debug_frame::Precision as CliPrecision;
 use crate::gpu::Gpu;
 use crate::vk::Buffer;
 use anyhow::{ensure, Result};
@@ -76,8 +75,7 @@ fn components(w: u32, bits: u32) -> [i32; 2] {
 }
 
 /// Parity of one precision.
-pub fn octahedral(gpu: &Gpu, precision: CliPrecision) -> Result<Report> {
-    let prec = Precision::from_u32(precision.code());
+pub fn octahedral(gpu: &Gpu, precision: Precision) -> Result<Report> {
     let inputs = octahedral_inputs();
     let n = inputs.len();
     let ctx = &gpu.ctx;
@@ -98,16 +96,16 @@ pub fn octahedral(gpu: &Gpu, precision: CliPrecision) -> Result<Report> {
     let mut max_decode_ulps = 0u32;
     let mut max_direction = 0f64;
     for (i, input) in inputs.iter().enumerate() {
-        let cpu = octahedral::encode(*input, prec);
+        let cpu = octahedral::encode(*input, precision);
         let g = [enc[i][0], enc[i][1], enc[i][2]];
         if g != cpu {
-            if prec == Precision::F32 {
+            if precision == Precision::F32 {
                 let worst = (0..3).map(|c| ulp_distance(f32::from_bits(g[c]), f32::from_bits(cpu[c]))).max().unwrap_or(0);
                 if worst > DECODE_ULPS {
                     bad_encode.push((i, *input, g, cpu, worst));
                 }
             } else {
-                let bits = prec.bits();
+                let bits = precision.bits();
                 let m = ((1u32 << (bits - 1)) - 1) as f64;
                 let exact = project_f64(*input);
                 let (gc, cc) = (components(g[0], bits), components(cpu[0], bits));
@@ -126,7 +124,7 @@ pub fn octahedral(gpu: &Gpu, precision: CliPrecision) -> Result<Report> {
             }
         }
         // Decode of the GPU's own code, on the CPU.
-        let cpu_dec = octahedral::decode(g, prec);
+        let cpu_dec = octahedral::decode(g, precision);
         let gpu_dec = [dec[i][0], dec[i][1], dec[i][2]];
         let finite = gpu_dec.iter().all(|c| c.is_finite());
         let worst = (0..3).map(|c| ulp_distance(gpu_dec[c], cpu_dec[c])).max().unwrap_or(0);

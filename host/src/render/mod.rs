@@ -42,6 +42,7 @@ use glam::Mat4;
 use shaders::cluster_key::{slice_bounds, ClusterGrid};
 use shaders::layout::*;
 use technique::{FrameInputs, LightingTechnique, MAX_REGROWTHS};
+use shaders::octahedral::Precision;
 
 /// Declares [`Technique`] (the command line's `--technique` values) and its constructors from one
 /// line per technique: `doc, Variant = "name" => constructor`.
@@ -116,9 +117,10 @@ pub struct Settings {
     pub height: u32,
     pub tile_size: u32,
     pub technique: Technique,
-    /// `VIEW_SHADED` or `VIEW_HEATMAP`.
-    pub view: u32,
-    pub normal_precision: u32,
+    /// One of `View::FRAME`.
+    pub view: View,
+    /// Encoding of the G-buffer normals (the draws' `DrawParams::normal_precision` must match).
+    pub normal_precision: Precision,
     pub exposure: f32,
     /// Timed frames after the warm-up frame (0: render once, untimed beyond it).
     pub frames: u32,
@@ -212,12 +214,15 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
         bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
     }
-    if let Some(d) = scene.draws.iter().find(|d| d.params.normal_precision != s.normal_precision) {
+    if let Some(d) = scene.draws.iter().find(|d| d.params.normal_precision != s.normal_precision.code()) {
         bail!(
-            "a draw encodes normals at precision {} but the frame reads them at {}: flatten the scene at the frame's precision",
-            d.params.normal_precision,
+            "a draw encodes normals at precision {:?} but the frame reads them at {:?}: flatten the scene at the frame's precision",
+            Precision::from_u32(d.params.normal_precision),
             s.normal_precision
         );
+    }
+    if !View::FRAME.contains(&s.view) {
+        bail!("view {:?} is not a view of a rendered frame (one of {:?})", s.view, View::FRAME);
     }
     let ctx = &gpu.ctx;
     let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
@@ -232,7 +237,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
         .context("uploading geometry")?;
     let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
-    let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision).context("allocating the G-buffer")?;
+    let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
     let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
     let lights_view = lights_to_view(scene.view, scene.lights);
     let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
@@ -246,8 +251,8 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         num_lights: scene.lights.len() as u32,
         light_capacity: 0,
         effects: scene.effects,
-        normal_precision: s.normal_precision,
-        view: s.view,
+        normal_precision: s.normal_precision.code(),
+        view: s.view.code(),
         exposure: s.exposure,
         heat_max: HEAT_MAX,
     };
@@ -312,7 +317,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let pixels: Vec<u32> = frame_buf.read(n as usize)?;
     let readback = if s.read_back {
         let depth: Vec<u32> = targets.depth_buf.read(n as usize)?;
-        let precision = shaders::octahedral::Precision::from_u32(s.normal_precision);
+        let precision = s.normal_precision;
         let words: Vec<u32> = targets.normal_buf.read((precision.gbuffer_words() * n) as usize)?;
         let normals = words
             .chunks(precision.gbuffer_words() as usize)

@@ -31,7 +31,9 @@
 //! alpha_test = true
 //! ```
 //! Unknown keys are errors (`deny_unknown_fields`); so are values out of range (negative
-//! counts, fov outside (0, 180), NaN or infinite numbers). Every error names the file and key.
+//! counts, fov outside (0, 180), NaN or infinite numbers, more than `lights::MAX_LIGHTS` lights
+//! or `lights::MAX_HOTSPOT_CLUSTERS` clusters). Every error is one line naming the file and the
+//! key (`light[2].radius` for the third `[[light]]`), or the line and column of a syntax error.
 use super::{lights, Camera, Scene};
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
@@ -59,7 +61,7 @@ pub struct LightDesc {
     pub radius: f32,
     /// Linear RGB (default white).
     pub colour: Option<[f32; 3]>,
-    /// Default: `lights::DEFAULT_INTENSITY · lights::radius_scaled_intensity(radius)`.
+    /// Default: [`default_intensity`]`(radius)`.
     pub intensity: Option<f32>,
 }
 
@@ -102,11 +104,36 @@ pub struct EffectsDesc {
     pub alpha_test: Option<bool>,
 }
 
+impl Description {
+    /// Lights the scene will have: `lights.count` plus the `[[light]]` tables.
+    pub fn light_count(&self) -> usize {
+        self.lights.as_ref().map_or(0, |l| l.count) + self.light.len()
+    }
+}
+
 /// Parses a description (no file access); `file` only names the source in errors.
 pub fn parse(text: &str, file: &Path) -> Result<Description> {
-    let d: Description = toml::from_str(text).map_err(|e| anyhow!("scene description {}: {}", file.display(), e.to_string().trim_end()))?;
+    let d: Description = toml::from_str(text).map_err(|e| anyhow!("scene description {}{}: {}", file.display(), locate(text, e.span()), e.message().trim()))?;
     check(&d).map_err(|e| anyhow!("scene description {}: {e}", file.display()))?;
     Ok(d)
+}
+
+/// Longest excerpt of the offending line quoted in a syntax error.
+const QUOTE_CHARS: usize = 60;
+
+/// ` line L, column C (`the line`)` for a byte span of `text` (empty without one).
+fn locate(text: &str, span: Option<std::ops::Range<usize>>) -> String {
+    let Some(start) = span.map(|s| s.start.min(text.len())) else { return String::new() };
+    let before = &text.as_bytes()[..start];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+    let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+    let source = text[line_start..].lines().next().unwrap_or("").trim();
+    let mut quoted: String = source.chars().take(QUOTE_CHARS).collect();
+    if source.chars().count() > QUOTE_CHARS {
+        quoted.push('…');
+    }
+    format!(" line {line}, column {column} (`{quoted}`)")
 }
 
 fn finite(key: &str, values: &[f32]) -> Result<()> {
@@ -149,6 +176,9 @@ fn check(d: &Description) -> Result<()> {
         if l.count > lights::MAX_LIGHTS {
             bail!("lights.count = {} is more than the {} supported", l.count, lights::MAX_LIGHTS);
         }
+        if l.count + d.light.len() > lights::MAX_LIGHTS {
+            bail!("lights.count = {} and {} [[light]] tables make more than the {} lights supported", l.count, d.light.len(), lights::MAX_LIGHTS);
+        }
         for (key, v) in [("lights.radius", l.radius), ("lights.intensity", l.intensity)] {
             if let Some(v) = v {
                 finite(key, &[v])?;
@@ -160,8 +190,8 @@ fn check(d: &Description) -> Result<()> {
         if let Some(v) = l.offset {
             finite("lights.offset", &[v])?;
         }
-        if l.clusters == Some(0) {
-            bail!("lights.clusters must be at least 1");
+        if let Some(c) = l.clusters.filter(|&c| c == 0 || c > lights::MAX_HOTSPOT_CLUSTERS) {
+            bail!("lights.clusters = {c} is out of range: it must be in 1..={}", lights::MAX_HOTSPOT_CLUSTERS);
         }
         if l.clusters.is_some() && l.distribution != Distribution::Hotspots {
             bail!("lights.clusters only applies to distribution = \"hotspots\"");
@@ -170,7 +200,37 @@ fn check(d: &Description) -> Result<()> {
             bail!("lights.offset only applies to distribution = \"surfaces\"");
         }
     }
+    if d.light.len() > lights::MAX_LIGHTS {
+        bail!("{} [[light]] tables are more than the {} lights supported", d.light.len(), lights::MAX_LIGHTS);
+    }
+    for (i, l) in d.light.iter().enumerate() {
+        finite(&format!("light[{i}].position"), &l.position)?;
+        let non_negative = |key: &str, values: &[f32]| -> Result<()> {
+            finite(&format!("light[{i}].{key}"), values)?;
+            if values.iter().any(|&v| v < 0.0) {
+                bail!("light[{i}].{key} must be ≥ 0, got {values:?}");
+            }
+            Ok(())
+        };
+        non_negative("radius", &[l.radius])?;
+        if let Some(c) = l.colour {
+            non_negative("colour", &c)?;
+        }
+        match l.intensity {
+            Some(v) => non_negative("intensity", &[v])?,
+            None if !default_intensity(l.radius).is_finite() => {
+                bail!("light[{i}].radius = {}: the default intensity for it overflows 32-bit floats; give light[{i}].intensity", l.radius)
+            }
+            None => {}
+        }
+    }
     Ok(())
+}
+
+/// Intensity of an explicit light that gives none: `lights::DEFAULT_INTENSITY ·
+/// lights::radius_scaled_intensity(radius)`.
+fn default_intensity(radius: f32) -> f32 {
+    lights::DEFAULT_INTENSITY * lights::radius_scaled_intensity(radius)
 }
 
 /// Loads a description file and builds its scene (geometry, camera, lights, effects).
@@ -226,7 +286,7 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
         position: l.position,
         radius: l.radius,
         colour: l.colour.unwrap_or([1.0; 3]),
-        intensity: l.intensity.unwrap_or(lights::DEFAULT_INTENSITY * lights::radius_scaled_intensity(l.radius)),
+        intensity: l.intensity.unwrap_or_else(|| default_intensity(l.radius)),
     }));
     if let Some(e) = &d.effects {
         scene.effects.specular = e.specular.unwrap_or(scene.effects.specular);

@@ -17,6 +17,8 @@ use shaders::layout::PointLight;
 pub const MAX_LIGHTS: usize = 1 << 26;
 /// Intensity of generated lights unless told otherwise.
 pub const DEFAULT_INTENSITY: f32 = 0.15;
+/// Most centres [`hotspots`] takes (more would only cost memory: each centre is one cluster).
+pub const MAX_HOTSPOT_CLUSTERS: usize = 1 << 16;
 /// Fraction of the lights that [`hotspots`] puts around its centres (the rest are uniform).
 pub const HOTSPOT_FRACTION: f32 = 0.9;
 
@@ -108,8 +110,19 @@ fn check(n: usize, bounds: (Vec3, Vec3)) -> Result<()> {
     if n > MAX_LIGHTS {
         bail!("{n} lights requested, more than the {MAX_LIGHTS} supported (2 GiB of lights)");
     }
-    ensure!(bounds.0.is_finite() && bounds.1.is_finite(), "light bounds {bounds:?} are not finite");
+    ensure!(bounds.0.is_finite() && bounds.1.is_finite() && (bounds.1 - bounds.0).is_finite(), "light bounds {bounds:?} are not finite in 32-bit floats");
+    ensure!(bounds.0.cmple(bounds.1).all(), "light bounds {bounds:?} have a minimum above the maximum");
     Ok(())
+}
+
+/// `lights`, or an error naming the first one with a non-finite value: a scene whose extent (or
+/// surface offset) is near the `f32` range gives positions, radii or intensities beyond it.
+fn finite(lights: Vec<PointLight>) -> Result<Vec<PointLight>> {
+    let bad = |l: &PointLight| !l.position.iter().chain(&l.colour).chain([&l.radius, &l.intensity]).all(|v| v.is_finite());
+    if let Some(i) = lights.iter().position(bad) {
+        bail!("generated light {i} is not finite ({:?}): the scene's extent or the surface offset is too large for 32-bit floats", lights[i]);
+    }
+    Ok(lights)
 }
 
 /// `n` lights uniform in the scene's bounds, radii uniform in `[0.5, 1.5]·r₀`
@@ -127,7 +140,7 @@ pub fn uniform_in(bounds: (Vec3, Vec3), n: usize, seed: u64, radius_range: (f32,
     ensure!(r_lo.is_finite() && r_hi.is_finite() && 0.0 <= r_lo && r_lo <= r_hi, "light radius range {radius_range:?} must be finite with 0 ≤ min ≤ max");
     ensure!(intensity.is_finite() && intensity >= 0.0, "light intensity {intensity} must be finite and ≥ 0");
     let mut rng = Pcg32::new(seed);
-    Ok((0..n)
+    finite((0..n)
         .map(|_| {
             let p = rng.in_box(bounds);
             let radius = rng.range(r_lo, r_hi);
@@ -141,13 +154,13 @@ pub fn uniform_in(bounds: (Vec3, Vec3), n: usize, seed: u64, radius_range: (f32,
 /// rest uniform. Radii uniform in `[0.25, 0.75]·r₀`: the crowded regions stay crowded.
 pub fn hotspots(bounds: (Vec3, Vec3), n: usize, seed: u64, clusters: usize) -> Result<Vec<PointLight>> {
     check(n, bounds)?;
-    ensure!(clusters >= 1, "hotspot lights need at least one cluster");
+    ensure!((1..=MAX_HOTSPOT_CLUSTERS).contains(&clusters), "hotspot lights need 1..={MAX_HOTSPOT_CLUSTERS} clusters, got {clusters}");
     let mut rng = Pcg32::new(seed);
     let margin = (bounds.1 - bounds.0) * 0.1;
     let centres: Vec<Vec3> = (0..clusters).map(|_| rng.in_box((bounds.0 + margin, bounds.1 - margin))).collect();
     let sigma = 0.04 * (bounds.1 - bounds.0).length();
     let r0 = default_radius(bounds, n);
-    Ok((0..n)
+    finite((0..n)
         .map(|_| {
             let p = if rng.f32() < HOTSPOT_FRACTION {
                 let c = centres[(rng.next_u32() as usize) % clusters];
@@ -188,7 +201,7 @@ pub fn on_surfaces(scene: &Scene, n: usize, seed: u64, offset: f32) -> Result<Ve
     }
     let r0 = default_radius(scene.bounds, n);
     let mut rng = Pcg32::new(seed);
-    Ok((0..n)
+    finite((0..n)
         .map(|_| {
             let x = (rng.f32() as f64 * total).min(total);
             let k = cdf.partition_point(|&c| c <= x).min(tris.len() - 1);

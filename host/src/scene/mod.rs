@@ -7,16 +7,21 @@
 //!
 //! Conventions: right-handed, y up, counter-clockwise front faces seen from outside; units are
 //! whatever the geometry uses (the procedural scenes use metres, Sponza its original Crytek
-//! units, about 0.8 cm). Every error is one sentence naming the file, key or item at fault.
+//! units, about 0.8 cm). Every error is one line naming the file and its line or key, or the item
+//! at fault; [`Scene::load`] marks them as [`BadInput`](crate::bad_input::BadInput). A scene
+//! that loads has passed [`Scene::validate`]: every number the renderer reads is finite and in
+//! range. [`flatten`] adapts a scene to the renderer.
 use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec3};
 use shaders::layout::{PointLight, EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
 use std::path::{Path, PathBuf};
 
 pub mod description;
+pub mod flatten;
 pub mod lights;
 pub mod obj;
 pub mod procedural;
+pub mod wavefront;
 #[cfg(test)]
 mod tests;
 
@@ -239,10 +244,16 @@ impl Scene {
     ///
     /// A built-in name may carry a camera view, `name@view` ([`VIEWS`]): e.g. `city@corner`, a view
     /// with a large depth discontinuity.
+    ///
+    /// Every error is [`BadInput`](crate::bad_input::BadInput) on one line.
     pub fn load(spec: &str, assets_dir: &Path) -> Result<Scene> {
+        Self::load_spec(spec, assets_dir).map_err(crate::bad_input::bad_input)
+    }
+
+    fn load_spec(spec: &str, assets_dir: &Path) -> Result<Scene> {
         let with_view = spec.split_once('@').filter(|(name, _)| BUILT_INS.contains(&name.to_ascii_lowercase().as_str()));
         if let Some((name, view)) = with_view {
-            let mut scene = Self::load(name, assets_dir)?;
+            let mut scene = Self::load_spec(name, assets_dir)?;
             scene.camera = view_camera(name, view).with_context(|| {
                 format!("unknown view {view:?} of scene {name:?}: expected one of {}", VIEWS.iter().map(|v| format!("{}@{}", v.0, v.1)).collect::<Vec<_>>().join(", "))
             })?;
@@ -283,9 +294,25 @@ impl Scene {
 
     /// Checks everything the renderer relies on; the error names the item and its index.
     pub fn validate(&self) -> Result<()> {
+        let (lo, hi) = self.bounds;
+        if !(hi - lo).is_finite() {
+            bail!("scene {:?} spans {lo}..{hi}: its extent is not finite in 32-bit floats", self.name);
+        }
         self.camera.validate()?;
         if self.materials.is_empty() && !self.meshes.is_empty() {
             bail!("scene {:?} has meshes but no materials", self.name);
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let unit = |v: f32| (0.0..=1.0).contains(&v);
+            let in_range = m.albedo.into_iter().all(unit) && unit(m.specular) && m.roughness > 0.0 && m.roughness <= 1.0;
+            if !in_range {
+                bail!("material {i} ({:?}) is out of range: albedo and specular must be in [0, 1], roughness in (0, 1]: {m:?}", m.name);
+            }
+        }
+        for t in &self.textures {
+            if t.rgba8.len() as u64 != 4 * t.width as u64 * t.height as u64 {
+                bail!("texture {} holds {} bytes for {}x{} texels", t.path.display(), t.rgba8.len(), t.width, t.height);
+            }
         }
         for (m, mesh) in self.meshes.iter().enumerate() {
             let n = mesh.positions.len();

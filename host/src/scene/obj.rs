@@ -1,4 +1,5 @@
-//! Wavefront OBJ + MTL through `tobj` (`single_index`, `triangulate`).
+//! Wavefront OBJ + MTL scenes: the files, their materials and textures (`wavefront.rs` parses
+//! the text, so every error names the file and line).
 //!
 //! Material mapping: `Kd` → albedo; `map_Kd` → albedo texture; `Ks` → specular (its largest
 //! component); `Ns` → roughness ([`roughness_from_ns`]); `map_d` → alpha mask (alpha-tested).
@@ -6,23 +7,21 @@
 //! `d 0` on its opaque materials. `map_Ka` and bump/normal maps are not used. Texture paths are
 //! relative to the MTL's directory; backslashes are read as separators.
 //!
+//! Missing pieces are warnings, not errors: a material library that is not there (grey default
+//! material), a texture that is missing or cannot be decoded (drawn untextured / opaque), a
+//! `usemtl` naming no known material (the default material). A file that is there but malformed
+//! is an error.
+//!
 //! Default camera ([`default_camera`]): [`Camera::framing`] from +z, a little above and to the
 //! right (direction (0.35, 0.3, 1)), 60° vertical fov. Sponza and the bunny have their own.
-use super::{face_averaged_normals, Camera, Material, Mesh, Scene, Texture, TextureKind};
+use super::wavefront::{parse_mtl, parse_obj};
+use super::{Camera, Material, Scene, Texture, TextureKind};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::Vec3;
-use std::cell::RefCell;
 use std::collections::HashMap;
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
-/// Roughness from a Blinn-Phong exponent: `roughness = √(2 / (Ns + 2))`, the Beckmann slope
-/// α matching exponent `Ns` (Walter et al. 2007, eq. 4 inverted). `Ns` = 0 → 1 (matte),
-/// `Ns` = 7.84 (Sponza) → 0.45, `Ns` = 1000 → 0.045. Negative or NaN `Ns` counts as 0.
-pub fn roughness_from_ns(ns: f32) -> f32 {
-    let ns = if ns > 0.0 { ns } else { 0.0 };
-    (2.0 / (ns + 2.0)).sqrt()
-}
+pub use super::wavefront::{roughness_from_ns, texture_path};
 
 /// Loads `assets_dir/<name>/<name>.obj` (`sponza` or `bunny`) with its own default camera.
 pub fn load_builtin(name: &str, assets_dir: &Path) -> Result<Scene> {
@@ -66,16 +65,11 @@ pub fn default_camera(bounds: (Vec3, Vec3)) -> Camera {
     Camera::framing(bounds, Vec3::new(0.35, 0.3, 1.0), 60.0)
 }
 
-/// A texture path from an MTL statement: options (`-bm 1 …`) dropped, backslashes → `/`,
-/// relative to the MTL's directory.
-fn texture_path(mtl_dir: &Path, raw: &str) -> PathBuf {
-    let raw = raw.trim();
-    let name = if raw.starts_with('-') { raw.split_whitespace().last().unwrap_or(raw) } else { raw };
-    mtl_dir.join(name.replace('\\', "/"))
-}
-
 /// Decodes a texture file; masks get their coverage in every channel (see [`TextureKind`]).
 pub fn load_texture(path: &Path, kind: TextureKind) -> Result<Texture> {
+    if !path.is_file() {
+        bail!("{} is not a file", path.display());
+    }
     let img = image::ImageReader::open(path)
         .with_context(|| format!("cannot open {}", path.display()))?
         .with_guessed_format()
@@ -97,51 +91,35 @@ pub fn load(path: &Path) -> Result<Scene> {
     if !path.is_file() {
         bail!("scene file {} not found", path.display());
     }
-    let file = std::fs::File::open(path).with_context(|| format!("cannot open scene file {}", path.display()))?;
+    let text = std::fs::read(path).map_err(|e| anyhow!("cannot read scene file {}: {e}", path.display()))?;
+    let obj = parse_obj(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new("")).to_owned();
-    let mtl_dirs = RefCell::new(Vec::new());
-    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(file), &opts, |mtl| {
-        let full = dir.join(mtl);
-        mtl_dirs.borrow_mut().push(full.parent().unwrap_or(&dir).to_owned());
-        tobj::load_mtl(&full)
-    })
-    .map_err(|e| anyhow!("scene file {} is not a valid OBJ file: {e}", path.display()))?;
-    let mtl_dir = mtl_dirs.into_inner().into_iter().next().unwrap_or_else(|| dir.clone());
 
     let mut warnings = Vec::new();
-    let mtl_materials = materials.unwrap_or_else(|e| {
-        warnings.push(format!("{}: material library not loaded ({e}); using a grey default material", path.display()));
-        Vec::new()
-    });
-    let mut materials: Vec<Material> = mtl_materials
-        .iter()
-        .map(|m| Material {
-            name: m.name.clone(),
-            albedo: m.diffuse.unwrap_or([0.8; 3]),
-            albedo_texture: m.diffuse_texture.as_deref().map(|t| texture_path(&mtl_dir, t)),
-            specular: m.specular.map_or(0.0, |s| s.into_iter().fold(0.0, f32::max)).clamp(0.0, 1.0),
-            roughness: roughness_from_ns(m.shininess.unwrap_or(0.0)),
-            alpha_mask_texture: m.dissolve_texture.as_deref().map(|t| texture_path(&mtl_dir, t)),
-        })
-        .collect();
+    let mut materials: Vec<Material> = Vec::new();
+    for lib in &obj.material_libraries {
+        let mtl = dir.join(lib.replace('\\', "/"));
+        // Only regular files: a device or a pipe named by the OBJ could be read forever.
+        let read = if mtl.is_file() { std::fs::read(&mtl).map_err(|e| e.to_string()) } else { Err("not a file".into()) };
+        match read {
+            Ok(text) => materials.extend(parse_mtl(&text, &mtl, mtl.parent().unwrap_or(&dir))?),
+            Err(e) => warnings.push(format!("{}: material library {} not loaded ({e}); using a grey default material", path.display(), mtl.display())),
+        }
+    }
     let textures = load_textures(&mut materials, &mut warnings);
 
     let mut default_material = None;
-    let mut meshes = Vec::with_capacity(models.len());
-    for model in models {
-        let m = model.mesh;
-        if m.indices.is_empty() {
-            continue;
-        }
-        let material = match m.material_id.filter(|&id| id < materials.len()) {
+    let mut meshes = Vec::with_capacity(obj.meshes.len());
+    for m in obj.meshes {
+        let known = m.material_name.as_ref().and_then(|name| materials.iter().position(|x| &x.name == name));
+        let material = match known {
             Some(id) => id as u32,
             None => *default_material.get_or_insert_with(|| {
                 materials.push(Material::diffuse("default", [0.8; 3]));
                 materials.len() as u32 - 1
             }),
         };
-        meshes.push(mesh_from(m, material));
+        meshes.push(super::Mesh { material, ..m.mesh });
     }
     if materials.is_empty() {
         materials.push(Material::diffuse("default", [0.8; 3]));
@@ -151,29 +129,6 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mut scene = Scene::new(&name, meshes, materials, textures, default_camera(bounds));
     scene.warnings = warnings;
     Ok(scene)
-}
-
-/// Converts one tobj mesh: normals renormalised (or face-averaged when absent or degenerate),
-/// uvs flipped to Vulkan's convention (or zero when absent).
-fn mesh_from(m: tobj::Mesh, material: u32) -> Mesh {
-    let positions: Vec<[f32; 3]> = m.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
-    let n = positions.len();
-    let computed = || face_averaged_normals(&positions, &m.indices);
-    let normals = if m.normals.len() == 3 * n {
-        let mut fallback: Option<Vec<[f32; 3]>> = None;
-        m.normals
-            .chunks_exact(3)
-            .enumerate()
-            .map(|(i, v)| match Vec3::new(v[0], v[1], v[2]).try_normalize() {
-                Some(v) => v.to_array(),
-                None => fallback.get_or_insert_with(computed)[i],
-            })
-            .collect()
-    } else {
-        computed()
-    };
-    let uvs = if m.texcoords.len() == 2 * n { m.texcoords.chunks_exact(2).map(|t| [t[0], 1.0 - t[1]]).collect() } else { vec![[0.0; 2]; n] };
-    Mesh { positions, normals, uvs, indices: m.indices, material }
 }
 
 /// Decodes every distinct texture the materials name (in parallel). A texture that fails is
@@ -197,7 +152,11 @@ fn load_textures(materials: &mut [Material], warnings: &mut Vec<String>) -> Vec<
             .chunks(chunk)
             .map(|part| s.spawn(move || part.iter().map(|(p, k)| load_texture(p, *k)).collect::<Vec<_>>()))
             .collect();
-        handles.into_iter().flat_map(|h| h.join().expect("texture decoding thread panicked")).collect()
+        handles
+            .into_iter()
+            .zip(wanted.chunks(chunk))
+            .flat_map(|(h, part)| h.join().unwrap_or_else(|_| part.iter().map(|(p, _)| Err(anyhow!("the decoder of {} panicked", p.display()))).collect()))
+            .collect()
     });
     let mut textures = Vec::new();
     let mut failed: HashMap<(PathBuf, TextureKind), String> = HashMap::new();

@@ -45,10 +45,22 @@ fn malformed_obj_names_the_file_and_the_problem() {
     let dir = TempDir::new("bad-obj");
     let p = dir.write("broken.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 999\n");
     let e = load_err(&p);
-    assert!(e.contains(&p.display().to_string()) && e.contains("face vertex index out of bounds"), "{e}");
+    assert_eq!(e, format!("OBJ file {} line 4: face position index 999 is out of range: 3 defined before this line", p.display()));
     let p = dir.write("junk.obj", "v 0 0 zero\n");
     let e = load_err(&p);
-    assert!(e.contains("junk.obj") && e.contains("parse error"), "{e}");
+    assert!(e.contains("junk.obj line 1: v: \"zero\" is not a number"), "{e}");
+    // A malformed MTL that is there is an error naming its line (a missing one is a warning).
+    dir.write("m.mtl", "newmtl a\nKd 0.5 nan 0.5\n");
+    let p = dir.write("uses-mtl.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+    let e = load_err(&p);
+    assert!(e.contains("m.mtl line 2: Kd: \"nan\" is not a finite"), "{e}");
+    // Finite coordinates whose extent overflows f32: refused with the scene named.
+    let p = dir.write("huge.obj", "v -3e38 0 0\nv 3e38 0 0\nv 0 1 0\nf 1 2 3\n");
+    let e = load_err(&p);
+    assert!(e.contains("huge.obj") && e.contains("extent is not finite"), "{e}");
+    // Every load error is bad input, on one line.
+    let e = Scene::load(p.to_str().unwrap(), &assets()).unwrap_err();
+    assert!(crate::bad_input::is_bad_input(&e) && !format!("{e:#}").contains('\n'));
 }
 
 #[test]
@@ -175,6 +187,28 @@ fn descriptions_load_and_reject_bad_input() {
     assert!(e.contains("[camera]") && e.contains("parallel"), "{e}");
     let e = description_err("name = \"x\"\n");
     assert!(e.contains("missing field `geometry`"), "{e}");
+
+    // Syntax errors: one line with the line, column and source line.
+    let e = description_err("geometry = \"city\"\n[camera]\nposition = [0, 1,\n");
+    assert!(e.contains("line 4, column 1") && !e.contains('\n'), "{e}");
+    let e = description_err("geometry = \"city\"\nx = 1\nbrightness = 3\n");
+    assert!(e.contains("line 2, column 1 (`x = 1`): unknown field `x`"), "{e}");
+    // Explicit lights: every value finite and ≥ 0, and a default intensity that fits f32.
+    let light = |body: &str| description_err(&format!("geometry = \"city\"\n[[light]]\nposition = [0, 1, 0]\nradius = 1\n[[light]]\n{body}\n"));
+    let e = light("position = [0, inf, 0]\nradius = 1");
+    assert!(e.contains("light[1].position must be finite"), "{e}");
+    let e = light("position = [0, 1, 0]\nradius = -2");
+    assert!(e.contains("light[1].radius must be ≥ 0"), "{e}");
+    let e = light("position = [0, 1, 0]\nradius = 1\ncolour = [1, -1, 1]");
+    assert!(e.contains("light[1].colour must be ≥ 0"), "{e}");
+    let e = light("position = [0, 1, 0]\nradius = 1\nintensity = nan");
+    assert!(e.contains("light[1].intensity must be finite"), "{e}");
+    let e = light("position = [0, 1, 0]\nradius = 1e30");
+    assert!(e.contains("light[1].radius = 1000000000000000000000000000000") && e.contains("give light[1].intensity"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"hotspots\"\nclusters = 100000000\n");
+    assert!(e.contains("lights.clusters = 100000000 is out of range"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 4000000000\ndistribution = \"uniform\"\n");
+    assert!(e.contains("lights.count = 4000000000 is more than the 67108864 supported"), "{e}");
 }
 
 #[test]

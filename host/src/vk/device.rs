@@ -29,6 +29,10 @@ pub struct DeviceInfo {
     pub async_timestamp_valid_bits: u32,
     pub max_shared_memory_bytes: u32,
     pub max_storage_buffer_range: u32,
+    /// Largest width or height of a 2D image (`maxImageDimension2D`; lavapipe: 16384).
+    pub max_image_dimension_2d: u32,
+    /// Size of the largest device-local memory heap, bytes (what one frame's buffers share).
+    pub device_local_bytes: u64,
     pub max_workgroup_invocations: u32,
     pub graphics_family: u32,
     /// A compute-only queue family ("async compute"), when the device has one.
@@ -104,6 +108,13 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         .iter()
         .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && !q.queue_flags.contains(vk::QueueFlags::GRAPHICS));
     let (kind, rank) = kind_name(p.device_type);
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let device_local_bytes = memory.memory_heaps[..(memory.memory_heap_count as usize).min(vk::MAX_MEMORY_HEAPS)]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
     let info = DeviceInfo {
         name: cstr(&p.device_name),
         kind,
@@ -119,6 +130,8 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         async_timestamp_valid_bits: async_compute.map(|f| families[f].timestamp_valid_bits).unwrap_or(0),
         max_shared_memory_bytes: p.limits.max_compute_shared_memory_size,
         max_storage_buffer_range: p.limits.max_storage_buffer_range,
+        max_image_dimension_2d: p.limits.max_image_dimension2_d,
+        device_local_bytes,
         max_workgroup_invocations: p.limits.max_compute_work_group_invocations,
         graphics_family: gfx.unwrap_or(0) as u32,
         async_compute_family: async_compute.map(|f| f as u32),

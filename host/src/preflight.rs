@@ -1,0 +1,189 @@
+//! What a frame and its lights need, against what the device has — checked before anything is
+//! loaded or allocated, so that a request too large for the device is a one-line
+//! [`BadInput`](crate::bad_input::BadInput) naming the flag (or the scene's light count) and the
+//! limit, never an allocation failure halfway through a frame, a validation error or a lost
+//! device.
+//!
+//! Limits checked (`vk::DeviceInfo` holds the device's):
+//! - width and height: 1 ..= min(`cluster_key::MAX_DIMENSION`, `maxImageDimension2D`);
+//! - tile size: 1 ..= `cluster_key::MAX_TILE_SIZE`, ≤ `tiled::MAX_TILED_TILE` for the tiled
+//!   techniques and Forward+;
+//! - the largest per-pixel buffer (the G-buffer normals: 4 or 16 bytes per pixel) within
+//!   `maxStorageBufferRange`, and the G-buffer plus frame ([`frame_bytes_per_pixel`]) within the
+//!   largest device-local heap;
+//! - lights: 32 bytes each within `maxStorageBufferRange`, at most `lights::MAX_LIGHTS`, and on
+//!   lavapipe the loop limiter's bound of the technique ([`max_lights`]).
+use crate::bail_input;
+use crate::render::Technique;
+use crate::scene::lights::MAX_LIGHTS;
+use crate::vk::DeviceInfo;
+use anyhow::Result;
+use shaders::cluster_key::{MAX_DIMENSION, MAX_TILE_SIZE};
+use shaders::layout::PointLight;
+use shaders::octahedral::Precision;
+use shaders::tiled::MAX_TILED_TILE;
+
+/// Bytes per pixel every technique allocates at least: the G-buffer's depth, normal and albedo
+/// targets and their storage copies (4 + 4 or 16 + 4 bytes each), and the RGBA8 frame.
+pub fn frame_bytes_per_pixel(precision: Precision) -> u64 {
+    let gbuffer = 4 + 4 * precision.gbuffer_words() as u64 + 4;
+    2 * gbuffer + 4
+}
+
+/// The command-line name of a technique.
+fn technique_name(t: Technique) -> String {
+    clap::ValueEnum::to_possible_value(&t).map_or_else(|| format!("{t:?}"), |v| v.get_name().to_owned())
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
+}
+
+/// Checks `--width`, `--height` and `--tile-size` against the grid's and the device's limits.
+pub fn check_frame(info: &DeviceInfo, width: u32, height: u32, tile_size: u32, precision: Precision) -> Result<()> {
+    let max = MAX_DIMENSION.min(info.max_image_dimension_2d);
+    for (flag, v) in [("--width", width), ("--height", height)] {
+        if v == 0 || v > max {
+            let why = if max < MAX_DIMENSION { format!("maxImageDimension2D of {}", info.name) } else { "the cluster grid's limit".into() };
+            bail_input!("{flag} {v} is out of range: it must be in 1..={max} ({why})");
+        }
+    }
+    if tile_size == 0 || tile_size > MAX_TILE_SIZE {
+        bail_input!("--tile-size {tile_size} is out of range: it must be in 1..={MAX_TILE_SIZE} px");
+    }
+    let pixels = width as u64 * height as u64;
+    let normals = pixels * 4 * precision.gbuffer_words() as u64;
+    let range = info.max_storage_buffer_range as u64;
+    if normals > range {
+        bail_input!(
+            "--width {width} --height {height}: the G-buffer normals need {} in one buffer; {} addresses at most {} per buffer (maxStorageBufferRange)",
+            mib(normals),
+            info.name,
+            mib(range)
+        );
+    }
+    let total = pixels * frame_bytes_per_pixel(precision);
+    if info.device_local_bytes > 0 && total > info.device_local_bytes {
+        bail_input!(
+            "--width {width} --height {height}: the G-buffer and frame need {}; {}'s largest device-local heap holds {}",
+            mib(total),
+            info.name,
+            mib(info.device_local_bytes)
+        );
+    }
+    Ok(())
+}
+
+/// `--tile-size` for a technique: the tiled techniques and Forward+ cull tiles of at most
+/// `MAX_TILED_TILE` px.
+pub fn check_tile_for(technique: Technique, tile_size: u32) -> Result<()> {
+    let tiled = matches!(technique, Technique::Tiled | Technique::Tiled25d | Technique::ForwardPlus);
+    if tiled && tile_size > MAX_TILED_TILE {
+        bail_input!("--tile-size {tile_size} is out of range for {}: tiles of at most {MAX_TILED_TILE} px", technique_name(technique));
+    }
+    Ok(())
+}
+
+/// Whether the device is lavapipe (llvmpipe), whose loop limiter bounds a shader's loops.
+pub fn is_llvmpipe(info: &DeviceInfo) -> bool {
+    info.driver_name.to_lowercase().contains("llvmpipe")
+}
+
+/// The most lights `technique` takes on this device, and the limit that sets it.
+pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u64, String) {
+    let range = info.max_storage_buffer_range as u64;
+    let mut limits = vec![
+        (MAX_LIGHTS as u64, "the renderer's limit (2 GiB of lights)".to_string()),
+        (range / std::mem::size_of::<PointLight>() as u64, format!("32-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange)", info.name, mib(range))),
+    ];
+    if is_llvmpipe(info) {
+        let n = match technique {
+            Technique::Tiled | Technique::Tiled25d => shaders::tiled::max_lights_llvmpipe(tile_size.max(1)),
+            Technique::ForwardPlus => shaders::forward_plus::MAX_LIGHTS_LLVMPIPE,
+            _ => shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE,
+        };
+        limits.push((n as u64, "lavapipe's loop limiter ends an invocation's loops after 65 535 iterations".to_string()));
+    }
+    limits.into_iter().min_by_key(|l| l.0).expect("at least one limit")
+}
+
+/// Checks `n` lights for `technique`; `what` names where the count came from (`--lights 5000`,
+/// `scene x.toml's lights`).
+pub fn check_lights(info: &DeviceInfo, technique: Technique, tile_size: u32, n: u64, what: &str) -> Result<()> {
+    let (max, why) = max_lights(info, technique, tile_size);
+    if n > max {
+        bail_input!("{what}: {n} lights, but {} takes at most {max} here ({why})", technique_name(technique));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn device(driver: &str, range: u32, image: u32, heap: u64) -> DeviceInfo {
+        DeviceInfo {
+            name: "test device".into(),
+            kind: "discrete GPU",
+            driver_name: driver.into(),
+            driver_info: String::new(),
+            api_version: "1.3".into(),
+            subgroup_size: 32,
+            min_subgroup_size: 32,
+            max_subgroup_size: 32,
+            full_subgroups: true,
+            timestamp_period_ns: 1.0,
+            timestamp_valid_bits: 64,
+            async_timestamp_valid_bits: 0,
+            max_shared_memory_bytes: 48 << 10,
+            max_storage_buffer_range: range,
+            max_image_dimension_2d: image,
+            device_local_bytes: heap,
+            max_workgroup_invocations: 1024,
+            graphics_family: 0,
+            async_compute_family: None,
+        }
+    }
+
+    fn err(r: Result<()>) -> String {
+        let e = r.unwrap_err();
+        assert!(crate::bad_input::is_bad_input(&e), "{e:#}");
+        format!("{e:#}")
+    }
+
+    #[test]
+    fn frames_are_checked_against_the_grid_and_the_device() {
+        let gpu = device("NVIDIA", u32::MAX, 32768, 80 << 30);
+        check_frame(&gpu, 7680, 4320, 32, Precision::F32).unwrap();
+        assert!(err(check_frame(&gpu, 0, 4320, 32, Precision::Oct16)).contains("--width 0 is out of range: it must be in 1..=32768 (the cluster grid's limit)"));
+        assert!(err(check_frame(&gpu, 64, 32769, 32, Precision::Oct16)).starts_with("--height 32769 is out of range"));
+        assert!(err(check_frame(&gpu, 64, 64, 0, Precision::Oct16)).contains("--tile-size 0 is out of range: it must be in 1..=1024"));
+        assert!(err(check_frame(&gpu, 64, 64, 1025, Precision::Oct16)).contains("--tile-size 1025"));
+        let small = device("llvmpipe", 128 << 20, 16384, 1 << 30);
+        assert!(err(check_frame(&small, 16385, 64, 32, Precision::Oct16)).contains("maxImageDimension2D of test device"));
+        // 4096 × 4096 × 4 B = 64 MiB of oct normals fit 128 MiB; float32's 256 MiB do not.
+        check_frame(&small, 4096, 4096, 32, Precision::Oct16).unwrap();
+        let e = err(check_frame(&small, 4096, 4096, 32, Precision::F32));
+        assert!(e.contains("--width 4096 --height 4096: the G-buffer normals need 256.0 MiB") && e.contains("128.0 MiB"), "{e}");
+        // The heap: 4096² px × 28 B/px = 448 MiB against a 256 MiB heap.
+        let e = err(check_frame(&device("x", u32::MAX, 16384, 256 << 20), 4096, 4096, 32, Precision::Oct16));
+        assert!(e.contains("448.0 MiB") && e.contains("device-local heap holds 256.0 MiB"), "{e}");
+        assert!(err(check_tile_for(Technique::Tiled, 64)).contains("--tile-size 64 is out of range for tiled"));
+        check_tile_for(Technique::ClusteredNaive, 64).unwrap();
+    }
+
+    #[test]
+    fn light_limits_follow_the_device_and_the_technique() {
+        let gpu = device("NVIDIA", u32::MAX, 32768, 80 << 30);
+        assert_eq!(max_lights(&gpu, Technique::Tiled, 32).0, MAX_LIGHTS as u64, "no loop limit on a GPU");
+        let lavapipe = device("llvmpipe", 128 << 20, 16384, 1 << 30);
+        assert_eq!(max_lights(&lavapipe, Technique::ClusteredBvh, 32).0, 400_000);
+        assert_eq!(max_lights(&lavapipe, Technique::Tiled, 32).0, 100_000);
+        assert_eq!(max_lights(&lavapipe, Technique::ForwardPlus, 16).0, 65_535);
+        let tiny = device("x", 32 << 10, 16384, 1 << 30);
+        assert_eq!(max_lights(&tiny, Technique::Deferred, 32).0, 1024, "32 KiB of 32-byte lights");
+        check_lights(&lavapipe, Technique::Deferred, 32, 400_000, "--lights 400000").unwrap();
+        let e = err(check_lights(&lavapipe, Technique::Deferred, 32, 400_001, "--lights 400001"));
+        assert!(e.starts_with("--lights 400001: 400001 lights, but deferred takes at most 400000 here (lavapipe's loop limiter"), "{e}");
+    }
+}
