@@ -119,7 +119,8 @@ fn check_description(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
 pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     check_args(gpu, a)?;
     check_description(gpu, a)?;
-    let mut scene = Scene::load(&a.scene, &a.assets).with_context(|| format!("loading scene {:?}", a.scene))?;
+    // Its errors name the file (and line or key) already.
+    let mut scene = Scene::load(&a.scene, &a.assets)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

@@ -298,6 +298,14 @@ mod tests {
         assert!(uniform_in(b(), 0, 1, (1.0, 1.0), 1.0).unwrap().is_empty());
         assert!(uniform_in(b(), 1, 1, (2.0, 1.0), 1.0).is_err());
         assert!(hotspots(b(), 10, 1, 0).is_err());
+        assert!(hotspots(b(), 10, 1, MAX_HOTSPOT_CLUSTERS + 1).unwrap_err().to_string().contains("clusters"));
+        // Found by fuzzing: inverted bounds put lights outside them.
+        let e = uniform_in((Vec3::ONE, Vec3::ZERO), 1, 1, (1.0, 1.0), 1.0).unwrap_err().to_string();
+        assert!(e.contains("minimum above the maximum"), "{e}");
+        // An extent past f32 (finite corners), and radii whose intensity overflows.
+        assert!(uniform_in((Vec3::splat(-3e38), Vec3::splat(3e38)), 1, 1, (1.0, 1.0), 1.0).is_err());
+        let e = uniform_in(b(), 3, 1, (1e30, 1e30), 1.0).unwrap_err().to_string();
+        assert!(e.contains("generated light 0 is not finite"), "{e}");
         let point = (Vec3::ONE, Vec3::ONE);
         assert!(uniform_in(point, 10, 1, (1.0, 1.0), 1.0).unwrap().iter().all(|l| l.position == [1.0; 3]));
         assert_eq!(default_radius(point, 10), 1.0);
