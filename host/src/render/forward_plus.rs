@@ -18,7 +18,7 @@ use anyhow::{bail, Context as _, Result};
 use ash::vk;
 use shaders::forward_plus::{FP_COUNTER_NODES, MAX_LIGHTS_LLVMPIPE};
 use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS};
-use shaders::tiled::{MAX_TILED_TILE, MODE_TILED};
+use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED};
 
 /// Format of the forward pass's colour target: the frame's packed RGBA8 word.
 const COLOUR_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -268,7 +268,7 @@ impl ForwardPlus {
         })?;
         rec.pass("shading", |rec| {
             self.colour.transition(rec.cmd, vk::ImageLayout::UNDEFINED, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, top, vk::AccessFlags::empty(), out.0, out.1);
-            self.begin(gpu, rec, scene, &self.colour, shaders::raster_forward::BACKGROUND_RGBA8, true);
+            self.begin(gpu, rec, scene, &self.colour, shaders::shading::BACKGROUND_RGBA8, true);
             self.draw_all(gpu, rec, scene, &self.pipes.shade, &[&self.heads, &self.nodes, scene.lights, scene.materials, &self.counters, &self.winners], true);
             unsafe { d.cmd_end_rendering(rec.cmd) };
             self.colour.transition(rec.cmd, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, out.0, out.1, transfer, vk::AccessFlags::TRANSFER_READ);
@@ -323,7 +323,7 @@ impl ForwardPlus {
         let mut longest = 0;
         for &h in &heads {
             let (mut n, mut len) = (h, 0u32);
-            while n != shaders::forward_plus::NO_NODE && n < refs && len <= refs {
+            while n != shaders::shading::NO_NODE && n < refs && len <= refs {
                 len += 1;
                 n = nodes[2 * n as usize + 1];
             }

@@ -184,7 +184,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         );
     }
     let ctx = &gpu.ctx;
-    let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
+    let max_lights = shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
     if ctx.info.driver_name.to_lowercase().contains("llvmpipe") && scene.lights.len() > max_lights as usize {
         bail!(
             "{} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \
