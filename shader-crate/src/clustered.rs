@@ -201,61 +201,43 @@ pub fn cluster_light_fill(
     for_each_cluster_light(p, bounds, lights, unique[c as usize], |n, l| list[(base + n) as usize] = l);
 }
 
-/// 8. Clustered shading: per pixel, its cluster's lights (`_diffuse` for scenes without specular
-/// materials, the specular term compiled out, and `_specular`).
-#[inline]
-fn shade_clustered_impl<const SPECULAR: bool>(
-    wg: UVec3,
-    nwg: UVec3,
-    local: u32,
-    p: &FrameParams,
-    depth: &[f32],
-    normals: &[u32],
-    albedo: &[u32],
-    keys: &[u32],
-    page_base: &[u32],
-    slot_rank: &[u32],
-    counts: &[u32],
-    offsets: &[u32],
-    list: &[u32],
-    lights: &[PointLight],
-    materials: &[MaterialGpu],
-    frame: &mut [u32],
-    bounds: &[f32],
-) {
-    let i = linear_index(wg, nwg, local);
-    if i >= p.count {
-        return;
+specular_entries! {
+    shade_clustered_diffuse, shade_clustered_specular;
+    /// 8. Clustered shading: per pixel, its cluster's lights (`_diffuse` for scenes without specular
+    /// materials, the specular term compiled out, and `_specular`).
+    fn shade_clustered_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+    ) {
+        let i = linear_index(wg, nwg, local);
+        if i >= p.count {
+            return;
+        }
+        let key = keys[i as usize];
+        if key == INVALID_KEY {
+            frame[i as usize] = BACKGROUND_RGBA8;
+            return;
+        }
+        let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
+        let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
+        let mut cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        let mut sum = Vec3::ZERO;
+        let count = shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
+        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
     }
-    let key = keys[i as usize];
-    if key == INVALID_KEY {
-        frame[i as usize] = BACKGROUND_RGBA8;
-        return;
-    }
-    let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
-    let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
-    let mut cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
-    let mut sum = Vec3::ZERO;
-    let count = shading::shade_lights::<SPECULAR, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
-    frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
 }
-
-specular_entries!(shade_clustered_diffuse, shade_clustered_specular, shade_clustered_impl, (
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
-));

@@ -294,62 +294,44 @@ pub fn aabb_assign(
     }
 }
 
-/// 4. Shading: per pixel, its cluster's lights (`_diffuse` / `_specular` variants).
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn shade_aabb_impl<const SPECULAR: bool>(
-    wg: UVec3,
-    nwg: UVec3,
-    local: u32,
-    p: &FrameParams,
-    depth: &[f32],
-    normals: &[u32],
-    albedo: &[u32],
-    pixel_clusters: &[u32],
-    offsets: &[u32],
-    counts: &[u32],
-    list: &[u32],
-    counters: &[u32],
-    lights: &[PointLight],
-    materials: &[MaterialGpu],
-    frame: &mut [u32],
-    bounds: &[f32],
-) {
-    let i = linear_index(wg, nwg, local);
-    if i >= p.count {
-        return;
+specular_entries! {
+    shade_aabb_diffuse, shade_aabb_specular;
+    /// 4. Shading: per pixel, its cluster's lights (`_diffuse` / `_specular` variants).
+    fn shade_aabb_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] pixel_clusters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
+    ) {
+        let i = linear_index(wg, nwg, local);
+        if i >= p.count {
+            return;
+        }
+        let cluster = pixel_clusters[i as usize];
+        // An overflowed frame is re-run with a larger list: draw nothing from a partial one.
+        if cluster == NO_CLUSTER || counters[AABB_COUNTER_REFS as usize] > p.light_capacity {
+            frame[i as usize] = BACKGROUND_RGBA8;
+            return;
+        }
+        let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
+        let mut cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
+        let mut sum = Vec3::ZERO;
+        let count = shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
+        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
     }
-    let cluster = pixel_clusters[i as usize];
-    // An overflowed frame is re-run with a larger list: draw nothing from a partial one.
-    if cluster == NO_CLUSTER || counters[AABB_COUNTER_REFS as usize] > p.light_capacity {
-        frame[i as usize] = BACKGROUND_RGBA8;
-        return;
-    }
-    let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
-    let mut cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
-    let mut sum = Vec3::ZERO;
-    let count = shading::shade_lights::<SPECULAR, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
-    frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
 }
-
-specular_entries!(shade_aabb_diffuse, shade_aabb_specular, shade_aabb_impl, (
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] pixel_clusters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] list: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
-));
 
 #[cfg(test)]
 #[path = "clustered_aabb_tests.rs"]

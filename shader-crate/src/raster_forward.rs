@@ -114,9 +114,9 @@ pub fn forward_colour(
     // The frame-uniform specular bit picks the compiled variant (no specular code for scenes
     // without specular materials).
     let count = if f.effects & EFFECT_SPECULAR != 0 {
-        shading::shade_lights::<true, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+        shading::shade_lights::<true, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
     } else {
-        shading::shade_lights::<false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+        shading::shade_lights::<false, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
     };
     lighting::encode_srgb8(shading::lit_colour(f, sum, count))
 }

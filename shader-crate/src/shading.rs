@@ -9,11 +9,12 @@
 //!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
 //!   albedo and material ([`gbuffer_albedo`]).
 //! * **Light loop** — [`shade_lights`]: the sum of [`lighting::shade_variant`] over a
-//!   [`LightCursor`] (a range of indices in a buffer or workgroup memory, all lights, or a
-//!   Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration. The
-//!   effect bits it evaluates come from [`variant_effects`], the one place where a kernel's
-//!   compile-time specular variant meets `FrameParams::effects`: every other bit (the falloff
-//!   of `EFFECT_INVERSE_SQUARE_CUT`) reaches the shading unchanged.
+//!   [`LightCursor`] (a range of indices in a buffer or workgroup memory, [`light_range`]: all
+//!   lights, or a Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration
+//!   in the compute kernels, one in the Forward+ fragment shader. The effect bits it evaluates
+//!   come from [`variant_effects`], the one place where a kernel's compile-time specular variant
+//!   meets `FrameParams::effects`: every other bit (the falloff of `EFFECT_INVERSE_SQUARE_CUT`)
+//!   reaches the shading unchanged.
 //! * **Output** — [`BACKGROUND_RGBA8`], [`lit_colour`] (tonemap or heatmap), [`output_colour`]
 //!   (also the debug views that need the slice bounds), packed as sRGB8.
 //! * **Entries** — `specular_entries!` declares a kernel's `_diffuse` / `_specular` pair.
@@ -32,8 +33,9 @@ pub const BACKGROUND_RGBA8: u32 = 0xff_20_18_18;
 /// Workgroup size of every linear kernel.
 pub const LINEAR_WORKGROUP: u32 = 256;
 
-/// Lights the shading loop handles per loop iteration (straight-line): llvmpipe (lavapipe) ends an
-/// invocation's loops after 65 535 iterations in all, so the loop must not take one per light.
+/// Lights the unrolled shading loop handles per loop iteration (straight-line): llvmpipe
+/// (lavapipe) ends an invocation's loops after 65 535 iterations in all, so a compute kernel's
+/// loop must not take one per light.
 pub const SHADE_LIGHTS_PER_ITERATION: u32 = 16;
 
 /// What a [`LightCursor`] returns when its list has no more lights.
@@ -111,7 +113,7 @@ pub trait LightCursor {
 }
 
 /// Entries `first..first + count` of a list of light indices, entry `t` being `at(t)`: a range of
-/// a list buffer, of a workgroup-memory list, or all lights (`at(t) = t`).
+/// a list buffer or of a workgroup-memory list.
 pub struct IndexRange<F> {
     next: u32,
     end: u32,
@@ -131,6 +133,31 @@ impl<F: Fn(u32) -> u32> LightCursor for IndexRange<F> {
             let l = (self.at)(self.next);
             self.next += 1;
             l
+        } else {
+            NO_LIGHT
+        }
+    }
+}
+
+/// Lights `first..first + count` themselves: the brute-force list (every light). Its own type,
+/// not an [`IndexRange`] of `|t| t`: rust-gpu cannot address a zero-sized closure in a struct.
+pub struct LightRange {
+    next: u32,
+    end: u32,
+}
+
+/// The cursor over lights `first..first + count`.
+#[inline]
+pub fn light_range(first: u32, count: u32) -> LightRange {
+    LightRange { next: first, end: first + count }
+}
+
+impl LightCursor for LightRange {
+    #[inline]
+    fn next_light(&mut self) -> u32 {
+        if self.next < self.end {
+            self.next += 1;
+            self.next - 1
         } else {
             NO_LIGHT
         }
@@ -163,25 +190,41 @@ impl LightCursor for LinkedLights<'_> {
 
 /// The light loop of every technique: adds [`lighting::shade_variant`] of each light of `list`,
 /// in list order, to `sum`, with the effects of [`variant_effects`]; returns the number of
-/// lights walked. [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration (straight-line).
-/// Accumulating into `sum` lets a list shaded in parts (tiled rounds) add its lights in the
-/// order of one list.
+/// lights walked. Accumulating into `sum` lets a list shaded in parts (tiled rounds) add its
+/// lights in the order of one list.
+///
+/// `UNROLLED`: [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration (straight-line), what the
+/// compute kernels use to stay under llvmpipe's loop limiter with up to
+/// `light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE` lights. Otherwise one light per iteration:
+/// the Forward+ fragment shader (its frames are capped at `forward_plus::MAX_LIGHTS_LLVMPIPE` on
+/// llvmpipe), where lavapipe runs an unrolled body two orders of magnitude slower.
 #[inline]
-pub fn shade_lights<const SPECULAR: bool, L: LightCursor>(s: &Surface, frame_effects: u32, lights: &[PointLight], list: &mut L, sum: &mut Vec3) -> u32 {
+pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightCursor>(
+    s: &Surface,
+    frame_effects: u32,
+    lights: &[PointLight],
+    list: &mut L,
+    sum: &mut Vec3,
+) -> u32 {
     let effects = variant_effects::<SPECULAR>(frame_effects);
     let mut walked = 0;
     let mut more = true;
     while more {
-        unroll8!(_u => {
-            if more {
-                more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
-                walked += more as u32;
-            }
-            if more {
-                more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
-                walked += more as u32;
-            }
-        });
+        if UNROLLED {
+            unroll8!(_u => {
+                if more {
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    walked += more as u32;
+                }
+                if more {
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    walked += more as u32;
+                }
+            });
+        } else {
+            more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+            walked += more as u32;
+        }
     }
     walked
 }
@@ -225,18 +268,31 @@ pub fn output_colour(p: &FrameParams, bounds: &[f32], i: u32, s: &Surface, radia
     lighting::encode_srgb8(rgb)
 }
 
-/// Declares the `_diffuse` and `_specular` compute entry points (256 invocations) of a shading
-/// kernel from one parameter list: each calls `$imp::<false>` / `$imp::<true>` with every
-/// parameter, in order. One macro for every technique's shading kernels.
+/// Declares a shading kernel once and its `_diffuse` and `_specular` compute entry points (256
+/// invocations): the kernel is written as `fn name<const SPECULAR: bool>(bindings) { body }`
+/// with its `#[spirv(...)]` built-ins and bindings; the macro emits it as a plain function
+/// (attributes dropped) and the two entries calling it with `false` / `true`. One macro for
+/// every technique's shading kernels.
 #[cfg(feature = "compute")]
 macro_rules! specular_entries {
-    ($diffuse:ident, $specular:ident, $imp:ident, ($($(#[$attr:meta])* $arg:ident: $ty:ty),* $(,)?)) => {
+    (
+        $diffuse:ident, $specular:ident;
+        $(#[$meta:meta])*
+        fn $imp:ident<const $variant:ident: bool>($($(#[$attr:meta])* $arg:ident: $ty:ty),* $(,)?) $body:block
+    ) => {
+        $(#[$meta])*
+        #[inline]
+        #[allow(clippy::too_many_arguments)]
+        fn $imp<const $variant: bool>($($arg: $ty),*) $body
+
+        #[doc = concat!("[`", stringify!($imp), "`] without the specular term (scenes without specular materials).")]
         #[spirv(compute(threads(256)))]
         #[allow(clippy::too_many_arguments)]
         pub fn $diffuse($($(#[$attr])* $arg: $ty),*) {
             $imp::<false>($($arg),*);
         }
 
+        #[doc = concat!("[`", stringify!($imp), "`] with the specular term.")]
         #[spirv(compute(threads(256)))]
         #[allow(clippy::too_many_arguments)]
         pub fn $specular($($(#[$attr])* $arg: $ty),*) {

@@ -118,7 +118,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
                 let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
                 let list = &*s;
                 let mut tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
-                shading::shade_lights::<SPECULAR, _>(&surface, fp.effects, lights, &mut tile_list, &mut sums[slot as usize]);
+                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, lights, &mut tile_list, &mut sums[slot as usize]);
             }
             slot += 1;
         }
@@ -136,61 +136,43 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     out
 }
 
-/// One workgroup per tile, `(wg.x, wg.y)` = tile: writes the invocation's pixels and (invocation
-/// 0) the tile's light count.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn shade_tiled_impl<const SPECULAR: bool>(
-    wg: UVec3,
-    local_index: u32,
-    subgroup_size: u32,
-    lane: u32,
-    subgroup_id: u32,
-    num_subgroups: u32,
-    p: &TiledParams,
-    shared: &mut [u32; TILED_SHARED_WORDS],
-    depth: &[f32],
-    normals: &[u32],
-    albedo: &[u32],
-    lights: &[PointLight],
-    materials: &[MaterialGpu],
-    frame: &mut [u32],
-    bounds: &[f32],
-    tile_lights: &mut [u32],
-) {
-    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let o = shade_tile::<_, _, SPECULAR>(&c, shared, p, wg.x, wg.y, depth, normals, albedo, lights, materials, bounds);
-    let mut slot = 0;
-    while slot < MAX_PIXELS_PER_INVOCATION {
-        let i = o.pixels[slot as usize];
-        if i != NO_PIXEL {
-            frame[i as usize] = o.colours[slot as usize];
+specular_entries! {
+    shade_tiled_diffuse, shade_tiled_specular;
+    /// One workgroup per tile, `(wg.x, wg.y)` = tile: writes the invocation's pixels and (invocation
+    /// 0) the tile's light count.
+    fn shade_tiled_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(local_invocation_index)] local_index: u32,
+        #[spirv(subgroup_size)] subgroup_size: u32,
+        #[spirv(subgroup_local_invocation_id)] lane: u32,
+        #[spirv(subgroup_id)] subgroup_id: u32,
+        #[spirv(num_subgroups)] num_subgroups: u32,
+        #[spirv(push_constant)] p: &TiledParams,
+        #[spirv(workgroup)] shared: &mut [u32; TILED_SHARED_WORDS],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] tile_lights: &mut [u32],
+    ) {
+        let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+        let o = shade_tile::<_, _, SPECULAR>(&c, shared, p, wg.x, wg.y, depth, normals, albedo, lights, materials, bounds);
+        let mut slot = 0;
+        while slot < MAX_PIXELS_PER_INVOCATION {
+            let i = o.pixels[slot as usize];
+            if i != NO_PIXEL {
+                frame[i as usize] = o.colours[slot as usize];
+            }
+            slot += 1;
         }
-        slot += 1;
-    }
-    if local_index == 0 {
-        tile_lights[(wg.y * p.frame.grid.tiles_x + wg.x) as usize] = o.tile_lights;
+        if local_index == 0 {
+            tile_lights[(wg.y * p.frame.grid.tiles_x + wg.x) as usize] = o.tile_lights;
+        }
     }
 }
-
-specular_entries!(shade_tiled_diffuse, shade_tiled_specular, shade_tiled_impl, (
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(local_invocation_index)] local_index: u32,
-    #[spirv(subgroup_size)] subgroup_size: u32,
-    #[spirv(subgroup_local_invocation_id)] lane: u32,
-    #[spirv(subgroup_id)] subgroup_id: u32,
-    #[spirv(num_subgroups)] num_subgroups: u32,
-    #[spirv(push_constant)] p: &TiledParams,
-    #[spirv(workgroup)] shared: &mut [u32; TILED_SHARED_WORDS],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] tile_lights: &mut [u32],
-));
 
 #[cfg(test)]
 #[path = "tiled_tests.rs"]
