@@ -9,8 +9,7 @@ use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use anyhow::{bail, Result};
 use shaders::layout::{FrameParams, TiledParams};
-use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
-use shaders::tiled::max_lights_llvmpipe;
+use shaders::tiled::{max_lights_llvmpipe, MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
 
 pub struct Tiled {
     params: TiledParams,
