@@ -1,5 +1,5 @@
-//! The baseline techniques (`tiled`, `tiled-2.5d`, `clustered-aabb`, `forward-plus`) on the local device
-//! (lavapipe in CI), validation on: each image equals the brute-force `deferred` reference
+//! The baseline techniques (`tiled`, `tiled-2.5d`, `clustered-aabb`, `forward-plus`) on the local
+//! device (lavapipe in CI), validation on: each image equals the brute-force `deferred` reference
 //! (≤ 1/255 per channel after tonemapping) on city and Sponza at 1k and 10k lights, on a view with
 //! a large depth discontinuity, and when a fixed capacity overflows (2000 coincident lights: the
 //! tiled list takes several rounds, the clustered list buffer grows and the frame re-runs).

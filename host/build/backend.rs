@@ -66,10 +66,11 @@ pub fn prepare(shader_crate: &Path) -> anyhow::Result<Tools> {
         return Ok(Tools::Compiled(format!("{FORCE_COMPILED}=1")));
     }
     let versions: Result<Vec<String>, String> = TOOLS.iter().map(|t| tool_version(t)).collect();
-    let versions = match versions {
+    let mut versions = match versions {
         Ok(v) => v,
         Err(why) => return Ok(Tools::Compiled(why)),
     };
+    versions.dedup(); // both come from one SPIRV-Tools package
     std::fs::create_dir_all(install_dir.join("src"))?;
     let _lock = FileLock::lock(&install_dir.join("lockfile"))?;
     if built() {
@@ -105,10 +106,13 @@ pub fn prepare(shader_crate: &Path) -> anyhow::Result<Tools> {
     Ok(Tools::Installed(versions.join(", ")))
 }
 
-/// `<tool> --version`'s first line, or why the tool does not run.
+/// `<tool> --version`'s first line (`spirv-opt` prints it on stderr), or why the tool does not run.
 fn tool_version(tool: &str) -> Result<String, String> {
     match Command::new(tool).arg("--version").output() {
-        Ok(out) if out.status.success() => Ok(String::from_utf8_lossy(&out.stdout).lines().next().unwrap_or(tool).trim().to_string()),
+        Ok(out) if out.status.success() => {
+            let text = [out.stdout, out.stderr].concat();
+            Ok(String::from_utf8_lossy(&text).lines().find(|l| !l.trim().is_empty()).unwrap_or(tool).trim().to_string())
+        }
         Ok(out) => Err(format!("`{tool} --version` failed ({})", out.status)),
         Err(e) => Err(format!("{tool} not found ({e}); install spirv-tools (Debian/Ubuntu: apt-get install spirv-tools)")),
     }
