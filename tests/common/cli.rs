@@ -49,7 +49,13 @@ pub fn assert_refused(run: &Run, what: &str, status: i32, needles: &[&str]) {
     }
 }
 
-/// [`assert_refused`] for bad input: exit status [`BAD_INPUT`], one line mentioning `needle`.
+/// Bad input answered by exit status [`BAD_INPUT`], no panic, exactly one line starting
+/// `error: ` (other output, e.g. the device line, may stand beside it), mentioning `needle`.
 pub fn assert_one_line_error(run: &Run, what: &str, needle: &str) {
-    assert_refused(run, what, BAD_INPUT, &[needle]);
+    let err = &run.stderr;
+    assert_eq!(run.code, Some(BAD_INPUT), "{what}: exit status\n{err}");
+    assert!(!err.contains("panicked"), "{what} panicked:\n{err}");
+    let error_lines = err.lines().filter(|l| l.starts_with("error: ")).count();
+    assert_eq!(error_lines, 1, "{what}: one error line expected:\n{err}");
+    assert!(err.contains(needle), "{what}: error should mention {needle:?}:\n{err}");
 }
