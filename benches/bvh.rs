@@ -73,7 +73,7 @@ fn bvh(c: &mut Criterion) {
     let mut g = c.benchmark_group("light assignment (city 1280x720)");
     g.sample_size(10);
     for n in sizes("MANYLIGHTS_BVH_LIGHTS", &[1_000, 10_000, 100_000, 1_000_000]) {
-        if llvmpipe && n > shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE as usize {
+        if llvmpipe && n > shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE as usize {
             eprintln!("{n} lights: over lavapipe's loop limit, skipped");
             continue;
         }

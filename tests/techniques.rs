@@ -183,7 +183,7 @@ fn heatmaps() {
     let heat = |t, tile| frame(&gpu, &scene, &l, &Settings { view: View::Heatmap, ..settings(w, h, t, tile) }).pixels;
     assert_eq!(heat(Technique::ClusteredAabb, 32), heat(Technique::ClusteredNaive, 32), "clustered-aabb and clustered-naive heatmaps");
     assert_eq!(heat(Technique::ForwardPlus, 16), heat(Technique::Tiled, 16), "forward+ and tiled heatmaps");
-    let background = shaders::clustered::BACKGROUND_RGBA8;
+    let background = shaders::shading::BACKGROUND_RGBA8;
     for t in [Technique::Tiled, Technique::Tiled25d] {
         let px = heat(t, 16);
         assert!(px.iter().any(|&p| p != background && p & 0x00ff_ffff != 0), "{t:?}: the heatmap shows lights");

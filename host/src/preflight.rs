@@ -21,7 +21,7 @@ use anyhow::Result;
 use shaders::cluster_key::{MAX_DIMENSION, MAX_TILE_SIZE};
 use shaders::layout::PointLight;
 use shaders::octahedral::Precision;
-use shaders::tiled::MAX_TILED_TILE;
+use shaders::tile_cull::MAX_TILED_TILE;
 
 /// Bytes per pixel every technique allocates at least: the G-buffer's depth, normal and albedo
 /// targets and their storage copies (4 + 4 or 16 + 4 bytes each), and the RGBA8 frame.
@@ -100,7 +100,7 @@ pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u
         let n = match technique {
             Technique::Tiled | Technique::Tiled25d => shaders::tiled::max_lights_llvmpipe(tile_size.max(1)),
             Technique::ForwardPlus => shaders::forward_plus::MAX_LIGHTS_LLVMPIPE,
-            _ => shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE,
+            _ => shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE,
         };
         limits.push((n as u64, "lavapipe's loop limiter ends an invocation's loops after 65 535 iterations".to_string()));
     }

@@ -10,14 +10,14 @@
 //!    ([`crate::cluster_bounds`]).
 //! 2. **Active clusters** — each pixel stores its dense cluster index ([`pixel_cluster`]) and flags
 //!    it; then one invocation per cluster appends the flagged ones to the active list with a
-//!    subgroup-aggregated atomic ([`subgroup_reserve`]: a ballot elects one lane, which reserves
+//!    subgroup-aggregated atomic ([`subgroup_reserve`] of [`crate::light_lists`]: a ballot elects one lane, which reserves
 //!    the whole subgroup's slots with one atomic add).
 //! 3. **Assignment** — one invocation per active cluster. The workgroup stages [`LIGHT_BATCH`]
 //!    lights at a time in workgroup memory; every invocation tests all staged lights against its
 //!    box ([`lighting::sphere_intersects_aabb`]). Pass 1 counts, [`subgroup_reserve`] reserves
 //!    the cluster's list space with one atomic per subgroup, pass 2 writes the light indices (in
 //!    index order) — only if they fit the list buffer.
-//! 4. **Shading** — per pixel, the lights of its cluster's list.
+//! 4. **Shading** — per pixel, the lights of its cluster's list ([`shading::shade_lights`]).
 //!
 //! **Capacity.** The list buffer has a capacity; the reservation counter ends at the number of
 //! references the frame needs, the host reads it back and, if it exceeds the capacity, grows the
@@ -32,11 +32,11 @@
 //! reference. 1920×1080 with 32 px tiles (276 slices): C = 563 040 → 25.9 MB of grid data.
 //! Workgroup memory: [`AABB_SHARED_WORDS`] words (8 KiB).
 use crate::cluster_bounds::cluster_aabb;
-use crate::clustered::{linear_index, output_colour, surface, BACKGROUND_RGBA8};
 use crate::coop::gpu::GpuCoop;
-use crate::coop::{ballot_count, Coop, SharedU32};
+use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
-use crate::scan::subgroup_inclusive_scan;
+use crate::light_lists::{subgroup_reserve, AtomicAdd, ListSink};
+use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
 use crate::{lighting, reconstruct};
 use glam::Vec3;
 use spirv_std::glam::UVec3;
@@ -87,77 +87,6 @@ pub fn pixel_cluster(g: &ClusterGrid, bounds: &[f32], px: u32, py: u32, z_buf: f
     }
     let (i, j) = g.tile_of_pixel(px, py);
     dense_index(g, i, j, g.slice_of_depth(bounds, reconstruct::distance_from_depth(g.near, z_buf)))
-}
-
-/// A global counter that hands out slots (`fetch_add` returns the old value).
-pub trait AtomicAdd {
-    fn fetch_add(&mut self, v: u32) -> u32;
-}
-
-/// A storage-buffer word: `OpAtomicIAdd` (device scope, relaxed) on the GPU. Off the GPU a plain
-/// add (sequential use only; the CPU emulation uses `&AtomicU32`).
-impl AtomicAdd for u32 {
-    #[inline]
-    fn fetch_add(&mut self, v: u32) -> u32 {
-        #[cfg(target_arch = "spirv")]
-        unsafe {
-            spirv_std::arch::atomic_i_add::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(self, v)
-        }
-        #[cfg(not(target_arch = "spirv"))]
-        {
-            let old = *self;
-            *self = old.wrapping_add(v);
-            old
-        }
-    }
-}
-
-#[cfg(not(target_arch = "spirv"))]
-impl AtomicAdd for &std::sync::atomic::AtomicU32 {
-    fn fetch_add(&mut self, v: u32) -> u32 {
-        std::sync::atomic::AtomicU32::fetch_add(self, v, std::sync::atomic::Ordering::Relaxed)
-    }
-}
-
-/// Subgroup-aggregated reservation: every lane asks for `n` consecutive slots of `counter` and
-/// gets the first. A ballot of the lanes that want any elects the lowest as leader; an inclusive
-/// scan of `n` over the subgroup gives each lane its offset and the total; the leader alone does
-/// one atomic add of the total; a shuffle broadcasts the base. A subgroup that wants nothing does
-/// no atomic. Lanes asking for 0 get an unspecified slot. Subgroup-uniform control flow.
-#[inline]
-pub fn subgroup_reserve<C: Coop, A: AtomicAdd + ?Sized>(c: &C, counter: &mut A, n: u32) -> u32 {
-    let want = c.ballot(n > 0);
-    if ballot_count(want) == 0 {
-        return 0;
-    }
-    let mut leader = 0;
-    let mut w = 0;
-    while w < 4 {
-        if want[w as usize] != 0 {
-            leader = 32 * w + want[w as usize].trailing_zeros();
-            break;
-        }
-        w += 1;
-    }
-    let inclusive = subgroup_inclusive_scan(c, n);
-    let total = c.shuffle(inclusive, c.subgroup_size() - 1);
-    let mut base = 0;
-    if c.lane() == leader {
-        base = counter.fetch_add(total);
-    }
-    c.shuffle(base, leader).wrapping_add(inclusive - n)
-}
-
-/// Where the assignment writes light indices (a storage buffer on the GPU).
-pub trait ListSink {
-    fn put(&mut self, i: u32, light: u32);
-}
-
-impl ListSink for [u32] {
-    #[inline]
-    fn put(&mut self, i: u32, light: u32) {
-        self[i as usize] = light;
-    }
 }
 
 #[inline]
@@ -365,92 +294,44 @@ pub fn aabb_assign(
     }
 }
 
-/// 4. Shading: per pixel, its cluster's lights (`_diffuse` / `_specular` variants).
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn shade_aabb_impl<const SPECULAR: bool>(
-    wg: UVec3,
-    nwg: UVec3,
-    local: u32,
-    p: &FrameParams,
-    depth: &[f32],
-    normals: &[u32],
-    albedo: &[u32],
-    pixel_clusters: &[u32],
-    offsets: &[u32],
-    counts: &[u32],
-    list: &[u32],
-    counters: &[u32],
-    lights: &[PointLight],
-    materials: &[MaterialGpu],
-    frame: &mut [u32],
-    bounds: &[f32],
-) {
-    let i = linear_index(wg, nwg, local);
-    if i >= p.count {
-        return;
-    }
-    let cluster = pixel_clusters[i as usize];
-    // An overflowed frame is re-run with a larger list: draw nothing from a partial one.
-    if cluster == NO_CLUSTER || counters[AABB_COUNTER_REFS as usize] > p.light_capacity {
-        frame[i as usize] = BACKGROUND_RGBA8;
-        return;
-    }
-    let (pos, n, alb, m) = surface(p, i, depth[i as usize], normals, albedo[i as usize]);
-    let mat = materials[m as usize];
-    let effects = if SPECULAR { EFFECT_SPECULAR } else { 0 };
-    let (first, count) = (offsets[cluster as usize], counts[cluster as usize]);
-    let mut sum = Vec3::ZERO;
-    let mut t = 0;
-    while t < count {
-        unroll8!(u => {
-            if t + u < count {
-                let light = lights[list[(first + t + u) as usize] as usize];
-                sum += lighting::shade(pos, n, alb, mat.specular, mat.roughness, &light, effects);
-            }
-        });
-        unroll8!(u => {
-            if t + 8 + u < count {
-                let light = lights[list[(first + t + 8 + u) as usize] as usize];
-                sum += lighting::shade(pos, n, alb, mat.specular, mat.roughness, &light, effects);
-            }
-        });
-        t += 16;
-    }
-    frame[i as usize] = output_colour(p, bounds, i, pos, n, sum, count);
-}
-
-/// Declares a shading entry point calling [`shade_aabb_impl`].
-macro_rules! shade_entry {
-    ($name:ident, $specular:expr) => {
-        #[spirv(compute(threads(256)))]
-        #[allow(clippy::too_many_arguments)]
-        pub fn $name(
-            #[spirv(workgroup_id)] wg: UVec3,
-            #[spirv(num_workgroups)] nwg: UVec3,
-            #[spirv(local_invocation_index)] local: u32,
-            #[spirv(push_constant)] p: &FrameParams,
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] pixel_clusters: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] list: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counters: &[u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
-        ) {
-            shade_aabb_impl::<$specular>(
-                wg, nwg, local, p, depth, normals, albedo, pixel_clusters, offsets, counts, list, counters, lights, materials, frame, bounds,
-            );
+specular_entries! {
+    shade_aabb_diffuse, shade_aabb_specular;
+    /// 4. Shading: per pixel, its cluster's lights (`_diffuse` / `_specular` variants).
+    fn shade_aabb_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] pixel_clusters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
+    ) {
+        let i = linear_index(wg, nwg, local);
+        if i >= p.count {
+            return;
         }
-    };
+        let cluster = pixel_clusters[i as usize];
+        // An overflowed frame is re-run with a larger list: draw nothing from a partial one.
+        if cluster == NO_CLUSTER || counters[AABB_COUNTER_REFS as usize] > p.light_capacity {
+            frame[i as usize] = BACKGROUND_RGBA8;
+            return;
+        }
+        let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
+        let mut cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
+        let mut sum = Vec3::ZERO;
+        let count = shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
+        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
+    }
 }
-shade_entry!(shade_aabb_diffuse, false);
-shade_entry!(shade_aabb_specular, true);
 
 #[cfg(test)]
 #[path = "clustered_aabb_tests.rs"]

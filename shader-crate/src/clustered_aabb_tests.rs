@@ -1,28 +1,14 @@
-//! CPU tests of `clustered_aabb`: the subgroup-aggregated reservation (disjoint, dense, one atomic
-//! per subgroup that wants anything) and the staged assignment (lists equal the brute-force
-//! sphere–box search in index order; nothing written past the capacity), at widths 4…64.
+//! CPU tests of `clustered_aabb`: the staged assignment (lists equal the brute-force sphere–box
+//! search in index order; nothing written past the capacity), at widths 4…64.
 use super::*;
 use crate::cluster_key::slice_bounds;
 use crate::coop::cpu::{run_workgroups, Emulation};
 use crate::lighting::light_touches;
 use crate::reconstruct::view_position;
-use crate::tiled::tests::Rng;
+use crate::test_support::{Counting, Rng};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 const WIDTHS: [u32; 5] = [4, 8, 16, 32, 64];
-
-/// Counts its atomic adds.
-struct Counting<'a> {
-    value: &'a AtomicU32,
-    calls: &'a AtomicU32,
-}
-
-impl AtomicAdd for Counting<'_> {
-    fn fetch_add(&mut self, v: u32) -> u32 {
-        self.calls.fetch_add(1, Ordering::Relaxed);
-        self.value.fetch_add(v, Ordering::Relaxed)
-    }
-}
 
 /// A list buffer shared by the emulated invocations; remembers the highest index written.
 struct SharedList<'a> {
@@ -34,32 +20,6 @@ impl ListSink for SharedList<'_> {
     fn put(&mut self, i: u32, light: u32) {
         self.words[i as usize].store(light, Ordering::Relaxed);
         self.highest.fetch_max(i + 1, Ordering::Relaxed);
-    }
-}
-
-#[test]
-fn subgroup_reserve_is_dense_disjoint_and_one_atomic_per_subgroup() {
-    for width in WIDTHS {
-        let mut rng = Rng(width as u64);
-        // Whole subgroups that want nothing (the second), lanes asking 0, 1 or many.
-        let wants: Vec<u32> = (0..256u32)
-            .map(|i| if (i / width) == 1 { 0 } else { [0, 1, 1, 5, 200][rng.below(5) as usize] })
-            .collect();
-        let (value, calls) = (AtomicU32::new(7), AtomicU32::new(0));
-        let emu = Emulation { width, workgroup_size: 256, shared_words: 0 };
-        let got = run_workgroups(emu, 1, |_, c, _| {
-            let mut counter = Counting { value: &value, calls: &calls };
-            subgroup_reserve(c, &mut counter, wants[c.local_index() as usize])
-        });
-        let total: u32 = wants.iter().sum();
-        assert_eq!(value.load(Ordering::Relaxed), 7 + total, "width {width}");
-        let subgroups_wanting = (0..256 / width).filter(|g| wants[(g * width) as usize..((g + 1) * width) as usize].iter().any(|&n| n > 0)).count();
-        assert_eq!(calls.load(Ordering::Relaxed) as usize, subgroups_wanting, "width {width}: one atomic per subgroup that wants slots");
-        let mut ranges: Vec<(u32, u32)> = got.iter().zip(&wants).filter(|(_, &n)| n > 0).map(|(&s, &n)| (s, s + n)).collect();
-        ranges.sort_unstable();
-        assert_eq!(ranges.first().unwrap().0, 7);
-        assert_eq!(ranges.last().unwrap().1, 7 + total);
-        assert!(ranges.windows(2).all(|w| w[0].1 == w[1].0), "width {width}: slots are dense and disjoint");
     }
 }
 

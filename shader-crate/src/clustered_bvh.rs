@@ -2,7 +2,8 @@
 //! (one dispatch per level, bottom-up) and the traversal-based light assignment (one subgroup per
 //! unique cluster, [`light_bvh::walk_subgroup`]), which replaces
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
-use crate::clustered::{cluster_box, linear_index};
+use crate::clustered::cluster_box;
+use crate::shading::linear_index;
 use crate::coop::gpu::GpuCoop;
 use crate::coop::Coop;
 use crate::layout::*;

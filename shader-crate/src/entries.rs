@@ -4,6 +4,7 @@
 //! mismatch fails them).
 use crate::coop::gpu::GpuCoop;
 use crate::layout::*;
+use crate::shading::linear_index;
 use crate::{bitonic, debug_view, octahedral, radix, scan};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -97,6 +98,32 @@ pub fn workgroup_scan(
     if local_index == 0 {
         totals[group as usize] = total;
     }
+}
+
+/// Device-wide scan, step 3: add each workgroup's offset to its elements.
+#[spirv(compute(threads(256)))]
+pub fn scan_add_offsets(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(push_constant)] p: &ScanFixParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] offsets: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] data: &mut [u32],
+) {
+    let i = linear_index(wg, nwg, local);
+    if i < p.count {
+        data[i as usize] = data[i as usize].wrapping_add(offsets[(i / crate::scan::SCAN_WORKGROUP) as usize]);
+    }
+}
+
+/// Device-wide scan: copy the grand total (the top level's single total) into a counter.
+#[spirv(compute(threads(1)))]
+pub fn scan_store_total(
+    #[spirv(push_constant)] p: &ScanFixParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] totals: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &mut [u32],
+) {
+    counters[p.slot as usize] = totals[0];
 }
 
 /// Debug frame of the analytic scene ([`debug_view`]); 8×8 pixel tiles.

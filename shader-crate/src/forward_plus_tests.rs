@@ -5,8 +5,11 @@
 use super::*;
 use crate::coop::cpu::{run_workgroups, Emulation};
 use crate::lighting::light_touches;
-use crate::tiled::tests::{frame_params, gbuffer, test_lights, Rng};
-use crate::tiled::{DepthCells, TileFrustum, TILED_WORKGROUP};
+use crate::light_lists::ListSink;
+use crate::shading::NO_NODE;
+use crate::test_support::{frame_params, gbuffer, test_lights, Rng};
+use crate::tile_cull::{depth_cell, depth_cells, keep_light, tile_frustum, tile_rect, DepthCells, TileFrustum, MODE_TILED_25D, TILED_WORKGROUP};
+use crate::reconstruct;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 struct Nodes<'a>(&'a [AtomicU32]);
@@ -19,7 +22,7 @@ impl ListSink for Nodes<'_> {
 
 /// The tile's frustum and mask as the kernel computes them, on the CPU.
 fn tile_test(g: &ClusterGrid, depth: &[f32], tx: u32, ty: u32) -> Option<(TileFrustum, DepthCells, u32)> {
-    let (x0, x1, y0, y1) = crate::tiled::tile_rect(g, tx, ty);
+    let (x0, x1, y0, y1) = tile_rect(g, tx, ty);
     let d: Vec<f32> = (y0..y1)
         .flat_map(|y| (x0..x1).map(move |x| (y * g.width + x) as usize))
         .filter(|&i| !reconstruct::is_background(depth[i]))
@@ -52,7 +55,7 @@ fn emulated_lists_hold_exactly_the_kept_lights() {
             let heads: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(NO_NODE)).collect();
             let nodes: Vec<AtomicU32> = (0..2 * need).map(|_| AtomicU32::new(0xdead)).collect();
             let counter = AtomicU32::new(0);
-            let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: TILED_SHARED_WORDS };
+            let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: TILE_CULL_SHARED_WORDS as usize };
             run_workgroups(emu, tiles, |t, c, s| {
                 let (mut ctr, mut head, mut sink) = (&counter, &heads[t as usize], Nodes(&nodes));
                 cull_tile(c, s, &p, t % g.tiles_x, t / g.tiles_x, &gb.depth, &lights, &mut ctr, &mut head, &mut sink, capacity)
@@ -91,5 +94,4 @@ fn emulated_lists_hold_exactly_the_kept_lights() {
             }
         }
     }
-    assert_eq!(crate::raster_forward::BACKGROUND_RGBA8, crate::clustered::BACKGROUND_RGBA8);
 }

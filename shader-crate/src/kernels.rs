@@ -53,7 +53,8 @@ pub const MORTON_CODES: Kernel<MortonParams> = Kernel::new("entries::morton_code
 pub const WORKGROUP_SCAN: Kernel<ScanParams> = Kernel::new("entries::workgroup_scan", 3, [crate::scan::SCAN_WORKGROUP, 1, 1], true);
 pub const DEBUG_VIEW: Kernel<DebugViewParams> = Kernel::new("entries::debug_view", 2, [8, 8, 1], false);
 
-// Clustered-deferred chain (`clustered.rs`). Linear kernels: 256 invocations, 2D-folded dispatch.
+// Clustered-deferred chain (`clustered.rs`). Linear kernels: 256 invocations, 2D-folded dispatch
+// (`shading::linear_index`).
 const fn linear<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
     Kernel::new(entry, storage_buffers, [256, 1, 1], false)
 }
@@ -66,10 +67,14 @@ pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster
 pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
 pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 13);
 pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_specular", 13);
-pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_deferred_diffuse", 7);
-pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_deferred_specular", 7);
-pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("clustered::scan_add_offsets", 2);
-pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("clustered::scan_store_total", 2, [1, 1, 1], false);
+
+// Brute-force deferred reference (`deferred.rs`).
+pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
+pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
+
+// Device-wide scan fix-ups (`entries.rs`).
+pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("entries::scan_add_offsets", 2);
+pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("entries::scan_store_total", 2, [1, 1, 1], false);
 
 // Radix sort (`entries.rs`, `radix.rs`): cooperative (workgroup barriers).
 pub const RADIX_HISTOGRAM: Kernel<RadixParams> = Kernel::new("entries::radix_histogram", 2, [256, 1, 1], true);
@@ -86,8 +91,8 @@ pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
     Kernel::new("clustered_bvh::cluster_light_fill_bvh", 8, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
-pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tiled::TILED_WORKGROUP, 1, 1], true);
-pub const SHADE_TILED_SPECULAR: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_specular", 8, [crate::tiled::TILED_WORKGROUP, 1, 1], true);
+pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
+pub const SHADE_TILED_SPECULAR: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_specular", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
 
 // Clustered-AABB technique (`clustered_aabb.rs`): fixed grid, precomputed boxes.
 pub const AABB_BOUNDS: Kernel<FrameParams> = linear("clustered_aabb::aabb_bounds", 2);
@@ -98,7 +103,7 @@ pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shad
 pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 12);
 
 // Forward+ (`forward_plus.rs`): tiled culling into per-tile linked lists.
-pub const FORWARD_PLUS_CULL: Kernel<TiledParams> = Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tiled::TILED_WORKGROUP, 1, 1], true);
+pub const FORWARD_PLUS_CULL: Kernel<TiledParams> = Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
 
 // Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): block sort and merge give each subgroup
 // a block / piece (cooperative); the splitters are one invocation per sample.

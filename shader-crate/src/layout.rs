@@ -346,7 +346,7 @@ const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);
 
 /// Push constants of the tiled techniques (`tiled.rs`): the frame plus the culling mode
-/// (`tiled::MODE_TILED` or `tiled::MODE_TILED_25D`).
+/// (`tile_cull::MODE_TILED` or `tile_cull::MODE_TILED_25D`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]

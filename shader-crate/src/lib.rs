@@ -16,6 +16,18 @@
 //! * [`bitonic`] — bitonic-warp merge sort (key–value): block sort, splitters, warp merge.
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
+//! * [`lighting`] — culling tests, falloff, BRDF, tonemapping and output encoding.
+//!
+//! Shared by the techniques (each technique module imports only these, never a sibling):
+//! * [`shading`] — shading I/O: pixel index, surface fetch, the light-list shading loop (the
+//!   frame's effect bits reach `lighting::shade` there), output colour, the `_diffuse` /
+//!   `_specular` entry macro (every shading kernel, the Forward+ fragment shader included).
+//! * [`light_lists`] — light-list building: atomics, subgroup-aggregated reservation, list sinks,
+//!   the naive light search loop, llvmpipe's loop limit.
+//! * [`tile_cull`] — tile depth bounds, frustum and 2.5D mask (tiled, tiled-2.5d, Forward+).
+//!
+//! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
+//! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
 #![cfg_attr(target_arch = "spirv", no_std)]
 // `raster::sample_draw_uniform` emits one SPIR-V instruction with `asm!` (as spirv-std does).
 #![cfg_attr(all(target_arch = "spirv", feature = "graphics"), feature(asm_experimental_arch))]
@@ -51,11 +63,15 @@ pub mod clustered_bvh;
 pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]
+pub mod deferred;
+#[cfg(feature = "compute")]
 pub mod entries;
 #[cfg(feature = "compute")]
 pub mod forward_plus;
 pub mod layout;
 pub mod light_bvh;
+#[cfg(feature = "compute")]
+pub mod light_lists;
 pub mod lighting;
 pub mod morton;
 pub mod octahedral;
@@ -67,10 +83,15 @@ pub mod raster;
 pub mod raster_forward;
 pub mod reconstruct;
 pub mod scan;
+pub mod shading;
 #[cfg(test)]
 mod sort_acceptance_tests;
 #[cfg(not(target_arch = "spirv"))]
 pub mod sort_inputs;
+#[cfg(test)]
+mod test_support;
+#[cfg(feature = "compute")]
+pub mod tile_cull;
 #[cfg(feature = "compute")]
 pub mod tiled;
 

@@ -142,7 +142,13 @@ pub fn sphere_intersects_aabb(center: Vec3, radius: f32, b: &ClusterAabb) -> boo
 /// Whether the light can contribute at `p`: `|p − c|² < r²`. [`shade`] is exactly 0 otherwise.
 #[inline]
 pub fn light_touches(light: &PointLight, p: Vec3) -> bool {
-    distance2(p, Vec3::from_array(light.position)) < light.radius * light.radius
+    in_range(Vec3::from_array(light.position), light.radius, p)
+}
+
+/// [`light_touches`] of a light with centre `c` and radius `r`.
+#[inline]
+pub fn in_range(c: Vec3, r: f32, p: Vec3) -> bool {
+    distance2(p, c) < r * r
 }
 
 /// Karis' windowed inverse-square falloff `saturate(1 − (d/r)⁴)² / (d² + 1)` from `dist2 = d²`:
@@ -225,6 +231,13 @@ pub fn shininess(roughness: f32) -> f32 {
 /// finite for every finite input, including `p = 0`, `n = 0`, `p = c`, `r = 0`, `r = 1e30`.
 #[inline]
 pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
+    shade_variant::<true>(p, n, albedo, specular, roughness, light, effects)
+}
+
+/// [`shade`] as a compiled shading variant evaluates it: with `SPECULAR = false` the specular
+/// lobe is not compiled at all (whatever `effects` says); with `true` it is [`shade`].
+#[inline]
+pub fn shade_variant<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     let c = Vec3::from_array(light.position);
     let dist2 = distance2(p, c);
     let att = falloff(dist2, light.radius, effects);
@@ -238,7 +251,7 @@ pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, ligh
         return Vec3::ZERO;
     }
     let mut spec = 0.0;
-    if effects & EFFECT_SPECULAR != 0 && specular > 0.0 {
+    if SPECULAR && effects & EFFECT_SPECULAR != 0 && specular > 0.0 {
         let ks = if specular < 1.0 { specular } else { 1.0 };
         let v = normalize_or(-p, n);
         let hv = l + v;

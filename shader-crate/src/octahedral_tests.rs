@@ -362,12 +362,12 @@ fn inexact_gpu_division_moves_codes_by_at_most_one() {
     println!("\n±1..5-ULP division: codes changed in {changed:?} of {} encodes (8/12/16 bits)", 6 * N);
 }
 
-/// The shading passes' G-buffer fetch (`clustered::gbuffer_normal`): one word per pixel for the
+/// The shading passes' G-buffer fetch (`shading::gbuffer_normal`): one word per pixel for the
 /// octahedral codes, four (three bit patterns and a pad) for float32, each pixel decoding to
 /// exactly what its own encoding decodes to.
 #[test]
 fn gbuffer_normal_fetch_uses_each_precisions_stride() {
-    use crate::clustered::gbuffer_normal;
+    use crate::shading::gbuffer_normal;
     use crate::layout::FrameParams;
     let dirs = [[0.0, 0.0, 1.0], [0.6, -0.8, 0.0], [-0.48, 0.6, 0.64], [0.3, 0.3, -0.905_538_5]];
     for p in Precision::ALL {

@@ -5,21 +5,18 @@
 //! the deferred techniques (the tests compare the images).
 //!
 //! The forward fragment shades with exactly the deferred inputs: the position from the pixel
-//! centre and the fragment's depth through [`reconstruct`] (what the deferred passes compute from
-//! the depth buffer), the normal encoded and decoded at the G-buffer precision, the albedo
-//! quantised to 8 bits as the `RGBA8_UNORM` G-buffer target stores it — so the image equals the
-//! deferred reference, not just a similar forward rendering.
+//! centre and the fragment's depth through [`shading::pixel_position`] (what the deferred passes
+//! compute from the depth buffer), the normal encoded and decoded at the G-buffer precision, the
+//! albedo quantised to 8 bits as the `RGBA8_UNORM` G-buffer target stores it, and the light loop
+//! and output of every technique ([`crate::shading`]) — so the image equals the deferred
+//! reference, not just a similar forward rendering.
 use crate::layout::*;
 use crate::octahedral::{self, Precision};
 use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
-use crate::{lighting, reconstruct};
+use crate::lighting;
+use crate::shading::{self, Surface, BACKGROUND_RGBA8};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
-
-/// Colour of pixels that show no geometry (the value of `clustered::BACKGROUND_RGBA8`).
-pub const BACKGROUND_RGBA8: u32 = 0xff_20_18_18;
-/// End of a tile's light list (`forward_plus::NO_NODE`).
-const NO_NODE: u32 = u32::MAX;
 
 /// Depth pre-pass vertex shader: the position only ([`clip_position`], as every vertex shader).
 #[spirv(vertex)]
@@ -99,26 +96,29 @@ pub fn forward_colour(
         return BACKGROUND_RGBA8;
     }
     let (px, py) = (frag.x as u32, frag.y as u32);
-    let pos = reconstruct::view_position(g, px, py, reconstruct::distance_from_depth(g.near, frag.z));
     let facing = if front_facing { in_normal } else { -in_normal };
     // The normal the deferred passes would read back from the G-buffer (any precision).
-    let n = Vec3::from_array(octahedral::decode(encode_gbuffer_normal(facing, p.draw.normal_precision), Precision::from_u32(f.normal_precision)));
+    let normal = Vec3::from_array(octahedral::decode(encode_gbuffer_normal(facing, p.draw.normal_precision), Precision::from_u32(f.normal_precision)));
     let a = Vec3::from_array(p.draw.albedo) * texel;
-    let albedo = Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z));
     let mat = materials[p.draw.material as usize];
-    let effects = f.effects & EFFECT_SPECULAR;
+    let surface = Surface {
+        pos: shading::pixel_position(g, px, py, frag.z),
+        normal,
+        albedo: Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z)),
+        specular: mat.specular,
+        roughness: mat.roughness,
+    };
     let (tx, ty) = g.tile_of_pixel(px, py);
-    let mut node = heads[(ty * g.tiles_x + tx) as usize];
+    let mut tile_list = shading::linked_lights(heads[(ty * g.tiles_x + tx) as usize], nodes);
     let mut sum = Vec3::ZERO;
-    let mut count = 0;
-    while node != NO_NODE {
-        let light = lights[nodes[2 * node as usize] as usize];
-        sum += lighting::shade(pos, n, albedo, mat.specular, mat.roughness, &light, effects);
-        count += 1;
-        node = nodes[2 * node as usize + 1];
-    }
-    let rgb = if f.view == VIEW_HEATMAP { lighting::heat_ramp(count, f.heat_max) } else { lighting::tonemap(sum, f.exposure) };
-    lighting::encode_srgb8(rgb)
+    // The frame-uniform specular bit picks the compiled variant (no specular code for scenes
+    // without specular materials).
+    let count = if f.effects & EFFECT_SPECULAR != 0 {
+        shading::shade_lights::<true, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+    } else {
+        shading::shade_lights::<false, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+    };
+    lighting::encode_srgb8(shading::lit_colour(f, sum, count))
 }
 
 /// Forward pass of untextured draws.

@@ -18,9 +18,10 @@ use super::Draw;
 use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
 use crate::vk::{Attachment, Binding, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
-use shaders::forward_plus::{FP_COUNTER_NODES, MAX_LIGHTS_LLVMPIPE, NO_NODE};
+use shaders::forward_plus::{FP_COUNTER_NODES, MAX_LIGHTS_LLVMPIPE};
+use shaders::shading::NO_NODE;
 use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS};
-use shaders::tiled::{MAX_TILED_TILE, MODE_TILED};
+use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED};
 
 pub struct ForwardPlus {
     depth: Image,
@@ -160,7 +161,7 @@ impl LightingTechnique for ForwardPlus {
         })?;
         rec.pass("shading", |rec| {
             rec.transition(&self.colour, ImageUse::Undefined, ImageUse::ColourTarget);
-            let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::raster_forward::BACKGROUND_RGBA8, 0, 0, 0]) };
+            let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::shading::BACKGROUND_RGBA8, 0, 0, 0]) };
             rec.begin_rendering(&[colour], Attachment { image: &self.depth, load: Load::Keep }, &self.reversed);
             let extra = [&self.heads, &self.nodes, f.lights, f.materials, &self.counters, &self.winners];
             self.draw_all(rec, f, &raster.forward_shade, &extra, true)?;

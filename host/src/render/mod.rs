@@ -225,7 +225,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         bail!("view {:?} is not a view of a rendered frame (one of {:?})", s.view, View::FRAME);
     }
     let ctx = &gpu.ctx;
-    let max_lights = shaders::clustered::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
+    let max_lights = shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
     if ctx.info.is_llvmpipe() && scene.lights.len() > max_lights as usize {
         bail!(
             "{} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \

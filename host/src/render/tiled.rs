@@ -9,7 +9,8 @@ use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use anyhow::{bail, Result};
 use shaders::layout::{FrameParams, TiledParams};
-use shaders::tiled::{max_lights_llvmpipe, MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
+use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
+use shaders::tiled::max_lights_llvmpipe;
 
 pub struct Tiled {
     params: TiledParams,

@@ -1,0 +1,53 @@
+//! Brute-force deferred shading (`deferred`), the correctness reference of every technique: one
+//! invocation per pixel sums every light of the frame over the G-buffer (no culling, no list).
+//!
+//! # Steps
+//!
+//! 1. **G-buffer** (raster, [`crate::raster`]): depth, normal, albedo + material per pixel.
+//! 2. **Shading** — per pixel, [`shading::shade_lights`] over all lights in index order; a light
+//!    that does not touch the pixel adds exactly 0 ([`crate::lighting`]), so the sum equals that
+//!    over the touching lights.
+//!
+//! **Cost**: `pixels × lights` light evaluations (the host skips it in benchmarks past a budget).
+//! **Memory**: nothing beyond the G-buffer, the lights and the frame.
+use crate::layout::*;
+use crate::light_lists::lights_meeting;
+use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
+use crate::{lighting, reconstruct};
+use spirv_std::glam::{UVec3, Vec3};
+use spirv_std::spirv;
+
+specular_entries! {
+    shade_deferred_diffuse, shade_deferred_specular;
+    /// Step 2 for pixel `i` of the linear dispatch (`_diffuse` / `_specular` variants).
+    fn shade_deferred_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+    ) {
+        let i = linear_index(wg, nwg, local);
+        if i >= p.count {
+            return;
+        }
+        let z = depth[i as usize];
+        if reconstruct::is_background(z) {
+            frame[i as usize] = BACKGROUND_RGBA8;
+            return;
+        }
+        let surface = shading::fetch_surface(p, i, z, normals, albedo[i as usize], materials);
+        let mut all_lights = shading::light_range(0, p.num_lights);
+        let mut sum = Vec3::ZERO;
+        shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut all_lights, &mut sum);
+        // The heatmap shows the lights that touch the pixel (the frame-uniform view: no divergence).
+        let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };
+        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, touching);
+    }
+}

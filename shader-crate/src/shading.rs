@@ -1,0 +1,308 @@
+//! Shading I/O shared by every technique: how a shading kernel finds its pixel, reads the
+//! surface, walks a light list and writes the colour. Used by the brute-force reference
+//! ([`crate::deferred`]), clustered naive/BVH ([`crate::clustered`]), tiled and 2.5D tiled
+//! ([`crate::tiled`]), clustered-AABB ([`crate::clustered_aabb`]) and the Forward+ fragment
+//! shader ([`crate::raster_forward`]); the linear non-shading kernels use [`linear_index`] too.
+//!
+//! * **Pixel** — [`linear_index`]: element of a 2D-folded linear dispatch.
+//! * **Surface** — [`fetch_surface`]: depth → view position ([`pixel_position`]), the G-buffer
+//!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
+//!   albedo and material ([`gbuffer_albedo`]).
+//! * **Light loop** — [`shade_lights`]: the sum of [`lighting::shade_variant`] over a
+//!   [`LightCursor`] (a range of indices in a buffer or workgroup memory, [`light_range`]: all
+//!   lights, or a Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration
+//!   in the compute kernels, one in the Forward+ fragment shader. The effect bits it evaluates
+//!   come from [`variant_effects`], the one place where a kernel's compile-time specular variant
+//!   meets `FrameParams::effects`: every other bit (the falloff of `EFFECT_INVERSE_SQUARE_CUT`)
+//!   reaches the shading unchanged.
+//! * **Output** — [`BACKGROUND_RGBA8`], [`lit_colour`] (tonemap or heatmap), [`output_colour`]
+//!   (also the debug views that need the slice bounds), packed as sRGB8.
+//! * **Entries** — `specular_entries!` declares a kernel's `_diffuse` / `_specular` pair.
+//!
+//! **Variants.** A scene without specular materials runs the `_diffuse` kernels: with
+//! `SPECULAR = false` the specular lobe is not in the compiled code (`shade_variant`), so such a
+//! scene never runs it ("simulate only the effects a scene calls for"). The Forward+ fragment
+//! shader selects the variant with a frame-uniform branch on the specular bit.
+use crate::layout::*;
+use crate::{lighting, octahedral, reconstruct};
+use spirv_std::glam::{UVec3, Vec3};
+
+/// Colour of pixels that show no geometry.
+pub const BACKGROUND_RGBA8: u32 = 0xff_20_18_18;
+
+/// Workgroup size of every linear kernel.
+pub const LINEAR_WORKGROUP: u32 = 256;
+
+/// Lights the unrolled shading loop handles per loop iteration (straight-line): llvmpipe
+/// (lavapipe) ends an invocation's loops after 65 535 iterations in all, so a compute kernel's
+/// loop must not take one per light.
+pub const SHADE_LIGHTS_PER_ITERATION: u32 = 16;
+
+/// What a [`LightCursor`] returns when its list has no more lights.
+pub const NO_LIGHT: u32 = u32::MAX;
+/// End of a Forward+ tile list (`heads` of an empty tile, `next` of the last node).
+pub const NO_NODE: u32 = u32::MAX;
+
+/// Element `(wg.y · num_wg.x + wg.x) · 256 + local` of a linear dispatch (domains larger than
+/// 65 535 workgroups fold into 2D dispatches).
+#[inline]
+pub fn linear_index(wg: UVec3, num_wg: UVec3, local: u32) -> u32 {
+    (wg.y * num_wg.x + wg.x) * LINEAR_WORKGROUP + local
+}
+
+/// Albedo and material index of a G-buffer albedo word (RGBA8 UNORM, material in alpha).
+#[inline]
+pub fn gbuffer_albedo(word: u32) -> (Vec3, u32) {
+    let c = |s: u32| ((word >> s) & 255) as f32 * (1.0 / 255.0);
+    (Vec3::new(c(0), c(8), c(16)), word >> 24)
+}
+
+/// Decoded G-buffer normal of pixel `i` from the normal buffer: one word per pixel (octahedral),
+/// or four (`F32`: three bit patterns and a pad), per `p.normal_precision` (frame-uniform, so the
+/// branch never diverges).
+#[inline]
+pub fn gbuffer_normal(p: &FrameParams, normals: &[u32], i: u32) -> Vec3 {
+    let precision = octahedral::Precision::from_u32(p.normal_precision);
+    let words = if precision.gbuffer_words() == 4 {
+        let b = 4 * i as usize;
+        [normals[b], normals[b + 1], normals[b + 2]]
+    } else {
+        [normals[i as usize], 0, 0]
+    };
+    Vec3::from_array(octahedral::decode(words, precision))
+}
+
+/// View-space position of pixel `(px, py)` whose depth-buffer value is `z_buf` (reversed Z): what
+/// every technique shades, the deferred ones from the depth buffer, Forward+ from the fragment.
+#[inline]
+pub fn pixel_position(g: &ClusterGrid, px: u32, py: u32, z_buf: f32) -> Vec3 {
+    reconstruct::view_position(g, px, py, reconstruct::distance_from_depth(g.near, z_buf))
+}
+
+/// The shading inputs of one pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// View-space position.
+    pub pos: Vec3,
+    pub normal: Vec3,
+    pub albedo: Vec3,
+    pub specular: f32,
+    pub roughness: f32,
+}
+
+/// The surface of geometry pixel `i` (depth-buffer value `z_buf`, G-buffer albedo word `albedo`).
+#[inline]
+pub fn fetch_surface(p: &FrameParams, i: u32, z_buf: f32, normals: &[u32], albedo: u32, materials: &[MaterialGpu]) -> Surface {
+    let g = &p.grid;
+    let (a, m) = gbuffer_albedo(albedo);
+    let mat = materials[m as usize];
+    Surface { pos: pixel_position(g, i % g.width, i / g.width, z_buf), normal: gbuffer_normal(p, normals, i), albedo: a, specular: mat.specular, roughness: mat.roughness }
+}
+
+/// The effect bits a shading variant evaluates: the frame's bits, with the specular bit that of
+/// the compiled variant. The one place the two meet.
+#[inline]
+pub const fn variant_effects<const SPECULAR: bool>(frame_effects: u32) -> u32 {
+    (frame_effects & !EFFECT_SPECULAR) | if SPECULAR { EFFECT_SPECULAR } else { 0 }
+}
+
+/// A light list as the shading loop walks it: each call returns the next light index, or
+/// [`NO_LIGHT`] once the list is done (and on every later call).
+pub trait LightCursor {
+    fn next_light(&mut self) -> u32;
+}
+
+/// Entries `first..first + count` of a list of light indices, entry `t` being `at(t)`: a range of
+/// a list buffer or of a workgroup-memory list.
+pub struct IndexRange<F> {
+    next: u32,
+    end: u32,
+    at: F,
+}
+
+/// The cursor over entries `first..first + count`, entry `t` being light `at(t)`.
+#[inline]
+pub fn index_range<F: Fn(u32) -> u32>(first: u32, count: u32, at: F) -> IndexRange<F> {
+    IndexRange { next: first, end: first + count, at }
+}
+
+impl<F: Fn(u32) -> u32> LightCursor for IndexRange<F> {
+    #[inline]
+    fn next_light(&mut self) -> u32 {
+        if self.next < self.end {
+            let l = (self.at)(self.next);
+            self.next += 1;
+            l
+        } else {
+            NO_LIGHT
+        }
+    }
+}
+
+/// Lights `first..first + count` themselves: the brute-force list (every light). Its own type,
+/// not an [`IndexRange`] of `|t| t`: rust-gpu cannot address a zero-sized closure in a struct.
+pub struct LightRange {
+    next: u32,
+    end: u32,
+}
+
+/// The cursor over lights `first..first + count`.
+#[inline]
+pub fn light_range(first: u32, count: u32) -> LightRange {
+    LightRange { next: first, end: first + count }
+}
+
+impl LightCursor for LightRange {
+    #[inline]
+    fn next_light(&mut self) -> u32 {
+        if self.next < self.end {
+            self.next += 1;
+            self.next - 1
+        } else {
+            NO_LIGHT
+        }
+    }
+}
+
+/// A Forward+ tile list: node `k` is `(light, next)` at words `2k`, `2k + 1`; [`NO_NODE`] ends it.
+pub struct LinkedLights<'a> {
+    node: u32,
+    nodes: &'a [u32],
+}
+
+/// The cursor over the linked list starting at node `head`.
+#[inline]
+pub fn linked_lights(head: u32, nodes: &[u32]) -> LinkedLights<'_> {
+    LinkedLights { node: head, nodes }
+}
+
+impl LightCursor for LinkedLights<'_> {
+    #[inline]
+    fn next_light(&mut self) -> u32 {
+        if self.node == NO_NODE {
+            return NO_LIGHT;
+        }
+        let k = 2 * self.node as usize;
+        self.node = self.nodes[k + 1];
+        self.nodes[k]
+    }
+}
+
+/// The light loop of every technique: adds [`lighting::shade_variant`] of each light of `list`,
+/// in list order, to `sum`, with the effects of [`variant_effects`]; returns the number of
+/// lights walked. Accumulating into `sum` lets a list shaded in parts (tiled rounds) add its
+/// lights in the order of one list.
+///
+/// `UNROLLED`: [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration (straight-line), what the
+/// compute kernels use to stay under llvmpipe's loop limiter with up to
+/// `light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE` lights. Otherwise one light per iteration:
+/// the Forward+ fragment shader (its frames are capped at `forward_plus::MAX_LIGHTS_LLVMPIPE` on
+/// llvmpipe), where lavapipe runs an unrolled body two orders of magnitude slower.
+#[inline]
+pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightCursor>(
+    s: &Surface,
+    frame_effects: u32,
+    lights: &[PointLight],
+    list: &mut L,
+    sum: &mut Vec3,
+) -> u32 {
+    let effects = variant_effects::<SPECULAR>(frame_effects);
+    let mut walked = 0;
+    let mut more = true;
+    while more {
+        if UNROLLED {
+            unroll8!(_u => {
+                if more {
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    walked += more as u32;
+                }
+                if more {
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    walked += more as u32;
+                }
+            });
+        } else {
+            more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+            walked += more as u32;
+        }
+    }
+    walked
+}
+
+/// One step of [`shade_lights`]: adds the next light's radiance; false at the end of the list.
+#[inline]
+fn shade_next<const SPECULAR: bool, L: LightCursor>(s: &Surface, effects: u32, lights: &[PointLight], list: &mut L, sum: &mut Vec3) -> bool {
+    let l = list.next_light();
+    if l == NO_LIGHT {
+        return false;
+    }
+    *sum += lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, &lights[l as usize], effects);
+    true
+}
+
+/// Display colour (linear RGB) of a shaded pixel in the views every technique has: the
+/// tonemapped radiance, or the heatmap of the `lights` its list held.
+#[inline]
+pub fn lit_colour(p: &FrameParams, radiance: Vec3, lights: u32) -> Vec3 {
+    if p.view == VIEW_HEATMAP {
+        lighting::heat_ramp(lights, p.heat_max)
+    } else {
+        lighting::tonemap(radiance, p.exposure)
+    }
+}
+
+/// Final colour of geometry pixel `i` of a deferred pass: [`lit_colour`], or one of the debug
+/// views (`VIEW_CLUSTERS`, `VIEW_NORMALS`, `VIEW_DEPTH`), packed as sRGB8.
+#[inline]
+pub fn output_colour(p: &FrameParams, bounds: &[f32], i: u32, s: &Surface, radiance: Vec3, lights: u32) -> u32 {
+    let g = &p.grid;
+    let rgb = match p.view {
+        VIEW_CLUSTERS => {
+            let h = crate::debug_view::hash_u32(g.key(bounds, i % g.width, i / g.width, s.pos.z));
+            Vec3::new((h & 255) as f32, ((h >> 8) & 255) as f32, ((h >> 16) & 255) as f32) * (1.0 / 255.0)
+        }
+        VIEW_NORMALS => s.normal * 0.5 + Vec3::splat(0.5),
+        VIEW_DEPTH => crate::debug_view::ramp(g.slice_of_depth(bounds, -s.pos.z) as f32 / g.num_slices as f32),
+        _ => lit_colour(p, radiance, lights),
+    };
+    lighting::encode_srgb8(rgb)
+}
+
+/// Declares a shading kernel once and its `_diffuse` and `_specular` compute entry points (256
+/// invocations): the kernel is written as `fn name<const SPECULAR: bool>(bindings) { body }`
+/// with its `#[spirv(...)]` built-ins and bindings; the macro emits it as a plain function
+/// (attributes dropped) and the two entries calling it with `false` / `true`. One macro for
+/// every technique's shading kernels.
+#[cfg(feature = "compute")]
+macro_rules! specular_entries {
+    (
+        $diffuse:ident, $specular:ident;
+        $(#[$meta:meta])*
+        fn $imp:ident<const $variant:ident: bool>($($(#[$attr:meta])* $arg:ident: $ty:ty),* $(,)?) $body:block
+    ) => {
+        $(#[$meta])*
+        #[inline]
+        #[allow(clippy::too_many_arguments)]
+        fn $imp<const $variant: bool>($($arg: $ty),*) $body
+
+        #[doc = concat!("[`", stringify!($imp), "`] without the specular term (scenes without specular materials).")]
+        #[spirv(compute(threads(256)))]
+        #[allow(clippy::too_many_arguments)]
+        pub fn $diffuse($($(#[$attr])* $arg: $ty),*) {
+            $imp::<false>($($arg),*);
+        }
+
+        #[doc = concat!("[`", stringify!($imp), "`] with the specular term.")]
+        #[spirv(compute(threads(256)))]
+        #[allow(clippy::too_many_arguments)]
+        pub fn $specular($($(#[$attr])* $arg: $ty),*) {
+            $imp::<true>($($arg),*);
+        }
+    };
+}
+#[cfg(feature = "compute")]
+pub(crate) use specular_entries;
+
+#[cfg(test)]
+#[path = "shading_tests.rs"]
+mod tests;

@@ -1,0 +1,171 @@
+//! CPU tests of `shading`: the light loop passes every effect bit of the frame through to
+//! `lighting::shade` (the inverse-square cut included) and fixes only the specular bit to the
+//! compiled variant; the cursors walk exactly their lists; the surface fetch and the variant
+//! effects are what the techniques rely on.
+use super::*;
+use crate::lighting::{attenuation, inverse_square_cut, light_touches, shade};
+use crate::test_support::{frame_params, gbuffer, grid, test_lights, Rng};
+
+/// Geometry pixels of a synthetic G-buffer, with a diffuse and a specular material.
+fn surfaces(rng: &mut Rng) -> (Vec<Surface>, Vec<PointLight>) {
+    let g = grid(40, 24, 16);
+    let gb = gbuffer(&g, rng);
+    let lights = test_lights(&g, rng, 300, 0);
+    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] }, MaterialGpu { specular: 0.7, roughness: 0.3, _pad: [0.0; 2] }];
+    let p = frame_params(g, lights.len() as u32);
+    let s = (0..g.width * g.height)
+        .filter(|&i| !reconstruct::is_background(gb.depth[i as usize]))
+        .map(|i| fetch_surface(&p, i, gb.depth[i as usize], &gb.normals, gb.albedo[i as usize], &materials))
+        .collect();
+    (s, lights)
+}
+
+/// The sum `lighting::shade` gives with `effects`, lights in index order.
+fn direct(s: &Surface, lights: &[PointLight], effects: u32) -> Vec3 {
+    lights.iter().fold(Vec3::ZERO, |sum, l| sum + shade(s.pos, s.normal, s.albedo, s.specular, s.roughness, l, effects))
+}
+
+/// The loop over all lights (the deferred list), in a variant.
+fn looped<const SPECULAR: bool>(s: &Surface, lights: &[PointLight], frame_effects: u32) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let n = shade_lights::<SPECULAR, true, _>(s, frame_effects, lights, &mut light_range(0, lights.len() as u32), &mut sum);
+    assert_eq!(n, lights.len() as u32);
+    sum
+}
+
+/// With `EFFECT_INVERSE_SQUARE_CUT` the loop equals `lighting::shade` with that bit, bit for bit,
+/// in both variants and with the other bits of a frame (culling modes, textures) around it; and
+/// it differs from the Karis-window sum wherever the two falloffs give different light.
+#[test]
+fn the_loop_shades_with_the_frames_falloff() {
+    let mut rng = Rng(41);
+    let (surfaces, lights) = surfaces(&mut rng);
+    let mut differing = 0;
+    for s in &surfaces {
+        for other in [0, EFFECT_TEXTURES | EFFECT_CULL_PLANES, EFFECT_CULL_EXACT] {
+            let cut = EFFECT_INVERSE_SQUARE_CUT | other;
+            assert_eq!(looped::<false>(s, &lights, cut), direct(s, &lights, EFFECT_INVERSE_SQUARE_CUT), "{s:?} frame effects {cut:#x}");
+            assert_eq!(looped::<true>(s, &lights, cut), direct(s, &lights, EFFECT_INVERSE_SQUARE_CUT | EFFECT_SPECULAR), "{s:?} frame effects {cut:#x}");
+            assert_eq!(looped::<false>(s, &lights, other), direct(s, &lights, 0), "{s:?} frame effects {other:#x}");
+        }
+        // Where some light reaches the pixel (n·l > 0) with a falloff the cut changes, the sums differ.
+        let falloffs_differ = lights.iter().any(|l| {
+            let c = Vec3::from_array(l.position);
+            let d2 = lighting::distance2(s.pos, c);
+            light_touches(l, s.pos) && s.normal.dot(c - s.pos) > 0.0 && l.intensity > 0.0 && attenuation(d2, l.radius) != inverse_square_cut(d2, l.radius)
+        });
+        if falloffs_differ {
+            assert_ne!(looped::<true>(s, &lights, EFFECT_INVERSE_SQUARE_CUT), looped::<true>(s, &lights, 0), "{s:?}: the cut must change the light");
+            differing += 1;
+        }
+    }
+    assert!(differing * 4 > surfaces.len(), "a quarter of the pixels must see a light whose falloffs differ: {differing} of {}", surfaces.len());
+}
+
+/// The specular bit is the variant's: `_diffuse` never adds the lobe (even if the frame says
+/// specular), `_specular` always does; on specular materials the two differ.
+#[test]
+fn the_specular_bit_is_the_variants() {
+    let mut rng = Rng(43);
+    let (surfaces, lights) = surfaces(&mut rng);
+    let mut lobes = 0;
+    for s in &surfaces {
+        for fx in [0, EFFECT_SPECULAR, EFFECT_SPECULAR | EFFECT_INVERSE_SQUARE_CUT] {
+            let rest = fx & !EFFECT_SPECULAR;
+            assert_eq!(looped::<false>(s, &lights, fx), direct(s, &lights, rest));
+            assert_eq!(looped::<true>(s, &lights, fx), direct(s, &lights, rest | EFFECT_SPECULAR));
+        }
+        if s.specular > 0.0 && looped::<true>(s, &lights, 0) != looped::<false>(s, &lights, 0) {
+            lobes += 1;
+        }
+    }
+    assert!(lobes > 0, "some specular pixel must show a highlight");
+    assert_eq!(variant_effects::<false>(EFFECT_SPECULAR | EFFECT_INVERSE_SQUARE_CUT), EFFECT_INVERSE_SQUARE_CUT);
+    assert_eq!(variant_effects::<true>(EFFECT_INVERSE_SQUARE_CUT), EFFECT_INVERSE_SQUARE_CUT | EFFECT_SPECULAR);
+    assert_eq!(variant_effects::<true>(u32::MAX), u32::MAX);
+}
+
+/// Every cursor walks its list once, in order, then stays at `NO_LIGHT`; the loop visits exactly
+/// the listed lights at every length around its 16-light iterations (and one light per
+/// iteration), and a forward+ linked list gives the sum of the same lights in list order.
+#[test]
+fn cursors_walk_exactly_their_lists() {
+    let mut rng = Rng(47);
+    let (surfaces, lights) = surfaces(&mut rng);
+    let s = &surfaces[surfaces.len() / 2];
+    for len in [0u32, 1, 7, 8, 15, 16, 17, 31, 32, 33, 100] {
+        let list: Vec<u32> = (0..len).map(|_| rng.below(lights.len() as u32)).collect();
+        let first = rng.below(5);
+        let mut buffer = vec![NO_LIGHT; first as usize];
+        buffer.extend(&list);
+        buffer.push(7); // past the range: never read
+        let mut range = index_range(first, len, |t| buffer[t as usize]);
+        let walked: Vec<u32> = core::iter::from_fn(|| Some(range.next_light()).filter(|&l| l != NO_LIGHT)).collect();
+        assert_eq!(walked, list, "range of {len}");
+        assert_eq!((range.next_light(), range.next_light()), (NO_LIGHT, NO_LIGHT));
+        let mut lights_range = light_range(first, len);
+        let walked: Vec<u32> = core::iter::from_fn(|| Some(lights_range.next_light()).filter(|&l| l != NO_LIGHT)).collect();
+        assert_eq!(walked, (first..first + len).collect::<Vec<_>>(), "lights {first}..+{len}");
+        assert_eq!(lights_range.next_light(), NO_LIGHT);
+        // Linked: nodes in scrambled slots, pushed on the head like the culling does (last first).
+        let mut slots: Vec<u32> = (0..len + 3).collect();
+        for k in (1..slots.len()).rev() {
+            slots.swap(k, rng.below(k as u32 + 1) as usize);
+        }
+        let mut nodes = vec![0u32; 2 * slots.len()];
+        let mut head = NO_NODE;
+        for (k, &l) in list.iter().enumerate().rev() {
+            let node = slots[k];
+            nodes[2 * node as usize] = l;
+            nodes[2 * node as usize + 1] = head;
+            head = node;
+        }
+        let chosen: Vec<PointLight> = list.iter().map(|&l| lights[l as usize]).collect();
+        let want = direct(s, &chosen, EFFECT_INVERSE_SQUARE_CUT | EFFECT_SPECULAR);
+        // The Forward+ fragment shader walks it one light per iteration; unrolled the same.
+        let mut sum = Vec3::ZERO;
+        assert_eq!(shade_lights::<true, false, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(sum, want, "linked list of {len}");
+        let mut sum = Vec3::ZERO;
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(sum, want, "linked list of {len}, unrolled");
+        let mut sum = Vec3::ZERO;
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut index_range(first, len, |t| buffer[t as usize]), &mut sum), len);
+        assert_eq!(sum, want, "range of {len}");
+    }
+}
+
+/// A list shaded in two parts into one sum equals the list shaded at once (tiled rounds).
+#[test]
+fn a_list_in_parts_sums_like_one_list() {
+    let mut rng = Rng(53);
+    let (surfaces, lights) = surfaces(&mut rng);
+    for s in surfaces.iter().step_by(7) {
+        let split = rng.below(lights.len() as u32);
+        let mut parts = Vec3::ZERO;
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &mut light_range(0, split), &mut parts);
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &mut light_range(split, lights.len() as u32 - split), &mut parts);
+        assert_eq!(parts, looped::<true>(s, &lights, EFFECT_SPECULAR));
+    }
+}
+
+/// The surface fetch decodes the G-buffer words and the material, at every normal precision.
+#[test]
+fn fetch_surface_decodes_the_gbuffer() {
+    let g = grid(8, 4, 16);
+    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] }, MaterialGpu { specular: 0.25, roughness: 0.5, _pad: [0.0; 2] }];
+    let n = [0.36f32, 0.48, 0.8];
+    for precision in [PRECISION_OCT8, PRECISION_OCT12, PRECISION_OCT16, PRECISION_F32] {
+        let prec = octahedral::Precision::from_u32(precision);
+        let w = octahedral::encode(n, prec);
+        let words: Vec<u32> = (0..32).flat_map(|_| w.into_iter().chain([0]).take(prec.gbuffer_words() as usize)).collect();
+        let mut p = frame_params(g, 0);
+        p.normal_precision = precision;
+        let z = g.near / 12.5;
+        let s = fetch_surface(&p, 13, z, &words, 0x0133_6699, &materials);
+        assert_eq!(s.pos, reconstruct::view_position(&g, 5, 1, reconstruct::distance_from_depth(g.near, z)));
+        assert_eq!(s.normal, Vec3::from_array(octahedral::decode(w, prec)), "precision {precision}");
+        assert_eq!(s.albedo, Vec3::new(0x99 as f32, 0x66 as f32, 0x33 as f32) * (1.0 / 255.0));
+        assert_eq!((s.specular, s.roughness), (0.25, 0.5));
+    }
+}

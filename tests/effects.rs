@@ -1,0 +1,133 @@
+//! The frame's effect bits reach the shading of every technique on the local device (lavapipe in
+//! CI), validation on. With `EFFECT_INVERSE_SQUARE_CUT` (the accuracy study's falloff rows) every
+//! technique must shade with the plain inverse square cut at each light's radius, not with Karis'
+//! window: its image differs from the window image on a meaningful share of the pixels, and both
+//! images equal a CPU shading of the read-back G-buffer (every light, `lighting::shade` with the
+//! frame's effect bits) within 1/255 — for the `_diffuse` and the `_specular` shading variants.
+mod common;
+use host::gpu::Gpu;
+use host::render::{self, Frame, Readback, Settings, Technique};
+use host::scene::flatten::{flatten, scene_input};
+use host::scene::{lights, Effects, Scene};
+use shaders::layout::{PointLight, View, EFFECT_INVERSE_SQUARE_CUT, EFFECT_SPECULAR};
+use shaders::octahedral::Precision;
+use shaders::lighting::{cut_radius, encode_srgb8, shade, tonemap};
+use shaders::raster::unorm8;
+use shaders::reconstruct::{distance_from_depth, is_background, view_position};
+use shaders::shading::BACKGROUND_RGBA8;
+
+/// The intensity threshold of the cut (one of the accuracy study's ε).
+const EPSILON: f32 = 1e-2;
+const WIDTH: u32 = 160;
+const HEIGHT: u32 = 90;
+const LIGHTS: usize = 1_000;
+/// The one material of the test scene: every pixel's albedo and BRDF are known to the CPU check.
+const ALBEDO: [f32; 3] = [0.8, 0.6, 0.4];
+const ROUGHNESS: f32 = 0.4;
+
+/// `city` with every material made the same (`specular` 0: the scene runs the `_diffuse` kernels).
+fn city(specular: f32) -> Scene {
+    let mut scene = Scene::load("city", &common::assets::dir()).unwrap();
+    for m in &mut scene.materials {
+        (m.albedo, m.specular, m.roughness, m.albedo_texture, m.alpha_mask_texture) = (ALBEDO, specular, ROUGHNESS, None, None);
+    }
+    scene.effects = Effects::from_materials(&scene.materials);
+    assert_eq!(scene.effects.specular, specular > 0.0);
+    scene
+}
+
+/// Uniform lights with the accuracy study's cut radius at [`EPSILON`]: `intensity·max(colour) /
+/// (d² + 1) ≥ ε` inside.
+fn cut_lights(scene: &Scene) -> Vec<PointLight> {
+    lights::uniform(scene, LIGHTS, 31)
+        .unwrap()
+        .into_iter()
+        .map(|l| PointLight { radius: cut_radius(l.intensity * l.colour.iter().fold(0f32, |m, &c| m.max(c)), EPSILON), ..l })
+        .collect()
+}
+
+fn settings(technique: Technique, read_back: bool) -> Settings {
+    Settings {
+        bvh_branching: 0,
+        async_compute: true,
+        sort: Default::default(),
+        width: WIDTH,
+        height: HEIGHT,
+        tile_size: 16,
+        technique,
+        view: View::Shaded,
+        normal_precision: Precision::Oct16,
+        exposure: 1.0,
+        frames: 0,
+        read_back,
+    }
+}
+
+fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], effects: u32, s: &Settings) -> Frame {
+    let flat = flatten(scene, s.normal_precision).unwrap();
+    let mut input = scene_input(scene, &flat, lights);
+    input.effects |= effects;
+    render::render(gpu, &input, s).unwrap_or_else(|e| panic!("{:?}: {e:#}", s.technique))
+}
+
+/// The CPU's image of the read-back G-buffer: every light, `lighting::shade` with `effects`.
+fn cpu_image(rb: &Readback, specular: f32, effects: u32) -> Vec<u32> {
+    let g = &rb.grid;
+    let albedo = glam::Vec3::from_array(ALBEDO.map(unorm8));
+    (0..(g.width * g.height) as usize)
+        .map(|i| {
+            let z = f32::from_bits(rb.depth[i]);
+            if is_background(z) {
+                return BACKGROUND_RGBA8;
+            }
+            let p = view_position(g, i as u32 % g.width, i as u32 / g.width, distance_from_depth(g.near, z));
+            let n = glam::Vec3::from_array(rb.normals[i]);
+            let sum = rb.lights_view.iter().fold(glam::Vec3::ZERO, |s, l| s + shade(p, n, albedo, specular, ROUGHNESS, l, effects));
+            encode_srgb8(tonemap(sum, 1.0))
+        })
+        .collect()
+}
+
+fn channel_diff(a: u32, b: u32) -> u32 {
+    (0..4).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap()
+}
+
+/// Pixels where the two images differ by more than 1/255 in some channel.
+fn differing(a: &[u32], b: &[u32]) -> usize {
+    a.iter().zip(b).filter(|(a, b)| channel_diff(**a, **b) > 1).count()
+}
+
+/// For one scene variant: every technique's cut image differs from its window image where the
+/// falloffs differ, and both equal the CPU shading within 1/255.
+fn assert_cut_reaches_every_technique(gpu: &Gpu, specular: f32) {
+    let scene = city(specular);
+    let lights = cut_lights(&scene);
+    let spec_bit = if specular > 0.0 { EFFECT_SPECULAR } else { 0 };
+    let rb = frame(gpu, &scene, &lights, 0, &settings(Technique::Deferred, true)).readback.unwrap();
+    let cpu_window = cpu_image(&rb, specular, spec_bit);
+    let cpu_cut = cpu_image(&rb, specular, spec_bit | EFFECT_INVERSE_SQUARE_CUT);
+    let geometry = cpu_cut.iter().filter(|&&p| p != BACKGROUND_RGBA8).count();
+    let expected = differing(&cpu_cut, &cpu_window);
+    assert!(expected * 5 > geometry, "specular {specular}: the falloffs should differ on a fifth of the {geometry} geometry pixels, they differ on {expected}");
+    for &t in Technique::ALL {
+        let window = frame(gpu, &scene, &lights, 0, &settings(t, false)).pixels;
+        let cut = frame(gpu, &scene, &lights, EFFECT_INVERSE_SQUARE_CUT, &settings(t, false)).pixels;
+        let changed = differing(&cut, &window);
+        assert!(changed * 5 > geometry, "{t:?}, specular {specular}: the inverse-square cut changes {changed} of {geometry} pixels (CPU: {expected})");
+        for (what, gpu_image, cpu) in [("cut", &cut, &cpu_cut), ("window", &window, &cpu_window)] {
+            let bad: Vec<(usize, u32, u32)> = (0..cpu.len()).filter(|&i| channel_diff(gpu_image[i], cpu[i]) > 1).map(|i| (i, gpu_image[i], cpu[i])).take(5).collect();
+            assert!(bad.is_empty(), "{t:?}, specular {specular}, {what}: pixels differ from the CPU shading by more than 1/255 (pixel, GPU, CPU): {bad:x?}");
+        }
+    }
+    common::assert_clean(gpu);
+}
+
+#[test]
+fn inverse_square_cut_reaches_every_diffuse_technique() {
+    assert_cut_reaches_every_technique(&common::gpu(), 0.0);
+}
+
+#[test]
+fn inverse_square_cut_reaches_every_specular_technique() {
+    assert_cut_reaches_every_technique(&common::gpu(), 0.5);
+}
