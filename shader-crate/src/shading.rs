@@ -240,6 +240,29 @@ fn shade_next<const SPECULAR: bool, L: LightCursor>(s: &Surface, effects: u32, l
     true
 }
 
+/// The colour of geometry pixel `i` of a deferred pass: its surface from the G-buffer, the sum
+/// over `list` ([`shade_lights`], unrolled), [`output_colour`] with the list's length for the
+/// heatmap. The whole per-pixel work of the clustered techniques once they have found the
+/// pixel's list.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightCursor>(
+    p: &FrameParams,
+    bounds: &[f32],
+    i: u32,
+    depth: &[f32],
+    normals: &[u32],
+    albedo: &[u32],
+    materials: &[MaterialGpu],
+    lights: &[PointLight],
+    list: &mut L,
+) -> u32 {
+    let surface = fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
+    let mut sum = Vec3::ZERO;
+    let count = shade_lights::<SPECULAR, true, L>(&surface, p.effects, lights, list, &mut sum);
+    output_colour(p, bounds, i, &surface, sum, count)
+}
+
 /// Display colour (linear RGB) of a shaded pixel in the views every technique has: the
 /// tonemapped radiance, or the heatmap of the `lights` its list held.
 #[inline]
