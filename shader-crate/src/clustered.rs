@@ -227,7 +227,7 @@ specular_entries! {
             return;
         }
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
-        let mut cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &mut cluster_list);
+        let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }

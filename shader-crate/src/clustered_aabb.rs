@@ -325,8 +325,8 @@ specular_entries! {
             frame[i as usize] = BACKGROUND_RGBA8;
             return;
         }
-        let mut cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &mut cluster_list);
+        let cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }
 
