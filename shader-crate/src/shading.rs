@@ -14,7 +14,8 @@
 //!   in the compute kernels, one in the Forward+ fragment shader. The effect bits it evaluates
 //!   come from [`variant_effects`], the one place where a kernel's compile-time specular variant
 //!   meets `FrameParams::effects`: every other bit (the falloff of `EFFECT_INVERSE_SQUARE_CUT`)
-//!   reaches the shading unchanged.
+//!   reaches the shading unchanged. [`shade_gbuffer_pixel`]: fetch, loop and output of one
+//!   G-buffer pixel (the clustered techniques).
 //! * **Output** — [`BACKGROUND_RGBA8`], [`lit_colour`] (tonemap or heatmap), [`output_colour`]
 //!   (also the debug views that need the slice bounds), packed as sRGB8.
 //! * **Entries** — `specular_entries!` declares a kernel's `_diffuse` / `_specular` pair.
