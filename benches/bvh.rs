@@ -114,7 +114,7 @@ fn bvh(c: &mut Criterion) {
                         let (order, nodes) = render::bvh::build_cpu(&lights_view, branching);
                         let mut refs = 0u64;
                         for &key in &rb.unique {
-                            let cluster = shaders::clustered::cluster_box(&p, &rb.bounds, key);
+                            let cluster = shaders::cluster_bounds::cluster_aabb_of_key(&p.grid, &rb.bounds, key);
                             refs += shaders::light_bvh::for_each_bvh_light(&nodes, &lights_view, &order, p.num_lights, branching, &cluster, |_, _| {}) as u64;
                         }
                         black_box(refs);

@@ -180,6 +180,14 @@ pub fn cluster_aabb(grid: &ClusterGrid, bounds: &[f32], i: u32, j: u32, k: u32) 
     }
 }
 
+/// [`cluster_aabb`] of the cluster with key `key` (`grid.unpack`): the box both clustered light
+/// searches (naive and BVH) test against.
+#[inline]
+pub fn cluster_aabb_of_key(grid: &ClusterGrid, bounds: &[f32], key: u32) -> ClusterAabb {
+    let (i, j, k) = grid.unpack(key);
+    cluster_aabb(grid, bounds, i, j, k)
+}
+
 #[cfg(test)]
 #[path = "cluster_bounds_tests.rs"]
 mod tests;

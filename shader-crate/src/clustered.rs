@@ -20,11 +20,11 @@
 #![allow(clippy::too_many_arguments)]
 
 use crate::layout::*;
-use crate::page_table::{self, INVALID_KEY};
 use crate::light_lists::lights_meeting;
+use crate::page_table::{self, INVALID_KEY};
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
 use crate::{cluster_bounds, cluster_test, lighting};
-use spirv_std::glam::{UVec3, Vec3};
+use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
 /// 1. Cluster key per pixel from the depth buffer.
@@ -123,13 +123,6 @@ pub fn compact_clusters(
     }
 }
 
-/// The view-space box of the cluster with key `key` (both light searches test against it).
-#[inline]
-pub fn cluster_box(p: &FrameParams, bounds: &[f32], key: u32) -> ClusterAabb {
-    let (i, j, k) = p.grid.unpack(key);
-    cluster_bounds::cluster_aabb(&p.grid, bounds, i, j, k)
-}
-
 /// Lights of cluster `key` whose sphere meets its box (naive: all lights), in index order;
 /// returns the count and calls `emit(n, light)` for each. With `EFFECT_CULL_PLANES` or
 /// `EFFECT_CULL_EXACT` (the accuracy study) the cluster's frustum planes or the exact
@@ -139,7 +132,7 @@ pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLi
     // The mode is uniform: one loop per test, so the default loop carries no other test's code.
     let mode = p.effects & (EFFECT_CULL_PLANES | EFFECT_CULL_EXACT);
     if mode == 0 {
-        let aabb = cluster_box(p, bounds, key);
+        let aabb = cluster_bounds::cluster_aabb_of_key(&p.grid, bounds, key);
         return lights_meeting(p.num_lights, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb));
     }
     let (i, j, k) = p.grid.unpack(key);
@@ -233,11 +226,8 @@ specular_entries! {
             frame[i as usize] = BACKGROUND_RGBA8;
             return;
         }
-        let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
-        let mut cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
-        let mut sum = Vec3::ZERO;
-        let count = shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
-        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
+        let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }

@@ -325,11 +325,8 @@ specular_entries! {
             frame[i as usize] = BACKGROUND_RGBA8;
             return;
         }
-        let surface = shading::fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
-        let mut cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
-        let mut sum = Vec3::ZERO;
-        let count = shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &mut cluster_list, &mut sum);
-        frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, count);
+        let cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }
 

@@ -2,12 +2,12 @@
 //! (one dispatch per level, bottom-up) and the traversal-based light assignment (one subgroup per
 //! unique cluster, [`light_bvh::walk_subgroup`]), which replaces
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
-use crate::clustered::cluster_box;
-use crate::shading::linear_index;
+use crate::cluster_bounds::cluster_aabb_of_key;
 use crate::coop::gpu::GpuCoop;
 use crate::coop::Coop;
 use crate::layout::*;
 use crate::light_bvh;
+use crate::shading::linear_index;
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
@@ -83,7 +83,7 @@ pub fn cluster_lights_bvh<C: Coop>(
     emit: impl FnMut(u32, u32),
 ) -> u32 {
     let f = &p.frame;
-    light_bvh::walk_subgroup(c, nodes, lights, order, f.num_lights, p.branching, &cluster_box(f, bounds, key), emit)
+    light_bvh::walk_subgroup(c, nodes, lights, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), emit)
 }
 
 /// Step 3, pass 1: lights per unique cluster (one subgroup each).

@@ -109,14 +109,14 @@ pub fn forward_colour(
         roughness: mat.roughness,
     };
     let (tx, ty) = g.tile_of_pixel(px, py);
-    let mut tile_list = shading::linked_lights(heads[(ty * g.tiles_x + tx) as usize], nodes);
+    let tile_list = shading::linked_lights(heads[(ty * g.tiles_x + tx) as usize], nodes);
     let mut sum = Vec3::ZERO;
     // The frame-uniform specular bit picks the compiled variant (no specular code for scenes
     // without specular materials).
     let count = if f.effects & EFFECT_SPECULAR != 0 {
-        shading::shade_lights::<true, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+        shading::shade_lights::<true, false, _>(&surface, f.effects, lights, &tile_list, &mut sum)
     } else {
-        shading::shade_lights::<false, false, _>(&surface, f.effects, lights, &mut tile_list, &mut sum)
+        shading::shade_lights::<false, false, _>(&surface, f.effects, lights, &tile_list, &mut sum)
     };
     lighting::encode_srgb8(shading::lit_colour(f, sum, count))
 }

@@ -9,12 +9,13 @@
 //!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
 //!   albedo and material ([`gbuffer_albedo`]).
 //! * **Light loop** — [`shade_lights`]: the sum of [`lighting::shade_variant`] over a
-//!   [`LightCursor`] (a range of indices in a buffer or workgroup memory, [`light_range`]: all
+//!   [`LightList`] (a range of indices in a buffer or workgroup memory, [`light_range`]: all
 //!   lights, or a Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration
 //!   in the compute kernels, one in the Forward+ fragment shader. The effect bits it evaluates
 //!   come from [`variant_effects`], the one place where a kernel's compile-time specular variant
 //!   meets `FrameParams::effects`: every other bit (the falloff of `EFFECT_INVERSE_SQUARE_CUT`)
-//!   reaches the shading unchanged.
+//!   reaches the shading unchanged. [`shade_gbuffer_pixel`]: fetch, loop and output of one
+//!   G-buffer pixel (the clustered techniques).
 //! * **Output** — [`BACKGROUND_RGBA8`], [`lit_colour`] (tonemap or heatmap), [`output_colour`]
 //!   (also the debug views that need the slice bounds), packed as sRGB8.
 //! * **Entries** — `specular_entries!` declares a kernel's `_diffuse` / `_specular` pair.
@@ -38,7 +39,7 @@ pub const LINEAR_WORKGROUP: u32 = 256;
 /// loop must not take one per light.
 pub const SHADE_LIGHTS_PER_ITERATION: u32 = 16;
 
-/// What a [`LightCursor`] returns when its list has no more lights.
+/// What [`LightList::step`] returns at the end of its list.
 pub const NO_LIGHT: u32 = u32::MAX;
 /// End of a Forward+ tile list (`heads` of an empty tile, `next` of the last node).
 pub const NO_NODE: u32 = u32::MAX;
@@ -106,35 +107,43 @@ pub const fn variant_effects<const SPECULAR: bool>(frame_effects: u32) -> u32 {
     (frame_effects & !EFFECT_SPECULAR) | if SPECULAR { EFFECT_SPECULAR } else { 0 }
 }
 
-/// A light list as the shading loop walks it: each call returns the next light index, or
-/// [`NO_LIGHT`] once the list is done (and on every later call).
-pub trait LightCursor {
-    fn next_light(&mut self) -> u32;
+/// A light list as the shading loop walks it: [`start`](Self::start) is the first position,
+/// [`step`](Self::step) gives the light at a position and the position after it, or [`NO_LIGHT`]
+/// at the end. Positions are plain integers and the list itself never changes, so the loop
+/// carries only integers: a reference carried around a loop (an `OpPhi` of a pointer, or of a
+/// struct holding one) is a variable pointer, which SPIR-V for Vulkan needs a capability for and
+/// drivers need not handle (a compute module with such phis crashed NVIDIA's pipeline compiler).
+pub trait LightList {
+    fn start(&self) -> u32;
+    fn step(&self, pos: u32) -> (u32, u32);
 }
 
 /// Entries `first..first + count` of a list of light indices, entry `t` being `at(t)`: a range of
 /// a list buffer or of a workgroup-memory list.
 pub struct IndexRange<F> {
-    next: u32,
+    first: u32,
     end: u32,
     at: F,
 }
 
-/// The cursor over entries `first..first + count`, entry `t` being light `at(t)`.
+/// The list of entries `first..first + count`, entry `t` being light `at(t)`.
 #[inline]
 pub fn index_range<F: Fn(u32) -> u32>(first: u32, count: u32, at: F) -> IndexRange<F> {
-    IndexRange { next: first, end: first + count, at }
+    IndexRange { first, end: first + count, at }
 }
 
-impl<F: Fn(u32) -> u32> LightCursor for IndexRange<F> {
+impl<F: Fn(u32) -> u32> LightList for IndexRange<F> {
     #[inline]
-    fn next_light(&mut self) -> u32 {
-        if self.next < self.end {
-            let l = (self.at)(self.next);
-            self.next += 1;
-            l
+    fn start(&self) -> u32 {
+        self.first
+    }
+
+    #[inline]
+    fn step(&self, t: u32) -> (u32, u32) {
+        if t < self.end {
+            ((self.at)(t), t + 1)
         } else {
-            NO_LIGHT
+            (NO_LIGHT, t)
         }
     }
 }
@@ -142,49 +151,58 @@ impl<F: Fn(u32) -> u32> LightCursor for IndexRange<F> {
 /// Lights `first..first + count` themselves: the brute-force list (every light). Its own type,
 /// not an [`IndexRange`] of `|t| t`: rust-gpu cannot address a zero-sized closure in a struct.
 pub struct LightRange {
-    next: u32,
+    first: u32,
     end: u32,
 }
 
-/// The cursor over lights `first..first + count`.
+/// The list of lights `first..first + count`.
 #[inline]
 pub fn light_range(first: u32, count: u32) -> LightRange {
-    LightRange { next: first, end: first + count }
+    LightRange { first, end: first + count }
 }
 
-impl LightCursor for LightRange {
+impl LightList for LightRange {
     #[inline]
-    fn next_light(&mut self) -> u32 {
-        if self.next < self.end {
-            self.next += 1;
-            self.next - 1
+    fn start(&self) -> u32 {
+        self.first
+    }
+
+    #[inline]
+    fn step(&self, l: u32) -> (u32, u32) {
+        if l < self.end {
+            (l, l + 1)
         } else {
-            NO_LIGHT
+            (NO_LIGHT, l)
         }
     }
 }
 
 /// A Forward+ tile list: node `k` is `(light, next)` at words `2k`, `2k + 1`; [`NO_NODE`] ends it.
+/// The position is the node.
 pub struct LinkedLights<'a> {
-    node: u32,
+    head: u32,
     nodes: &'a [u32],
 }
 
-/// The cursor over the linked list starting at node `head`.
+/// The linked list starting at node `head`.
 #[inline]
 pub fn linked_lights(head: u32, nodes: &[u32]) -> LinkedLights<'_> {
-    LinkedLights { node: head, nodes }
+    LinkedLights { head, nodes }
 }
 
-impl LightCursor for LinkedLights<'_> {
+impl LightList for LinkedLights<'_> {
     #[inline]
-    fn next_light(&mut self) -> u32 {
-        if self.node == NO_NODE {
-            return NO_LIGHT;
+    fn start(&self) -> u32 {
+        self.head
+    }
+
+    #[inline]
+    fn step(&self, node: u32) -> (u32, u32) {
+        if node == NO_NODE {
+            return (NO_LIGHT, node);
         }
-        let k = 2 * self.node as usize;
-        self.node = self.nodes[k + 1];
-        self.nodes[k]
+        let k = 2 * node as usize;
+        (self.nodes[k], self.nodes[k + 1])
     }
 }
 
@@ -199,45 +217,71 @@ impl LightCursor for LinkedLights<'_> {
 /// the Forward+ fragment shader (its frames are capped at `forward_plus::MAX_LIGHTS_LLVMPIPE` on
 /// llvmpipe), where lavapipe runs an unrolled body two orders of magnitude slower.
 #[inline]
-pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightCursor>(
+pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     s: &Surface,
     frame_effects: u32,
     lights: &[PointLight],
-    list: &mut L,
+    list: &L,
     sum: &mut Vec3,
 ) -> u32 {
     let effects = variant_effects::<SPECULAR>(frame_effects);
     let mut walked = 0;
+    let mut pos = list.start();
     let mut more = true;
     while more {
         if UNROLLED {
             unroll8!(_u => {
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
                     walked += more as u32;
                 }
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
                     walked += more as u32;
                 }
             });
         } else {
-            more = shade_next::<SPECULAR, L>(s, effects, lights, list, sum);
+            more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
             walked += more as u32;
         }
     }
     walked
 }
 
-/// One step of [`shade_lights`]: adds the next light's radiance; false at the end of the list.
+/// One step of [`shade_lights`]: adds the radiance of the light at `pos` and advances `pos`;
+/// false at the end of the list.
 #[inline]
-fn shade_next<const SPECULAR: bool, L: LightCursor>(s: &Surface, effects: u32, lights: &[PointLight], list: &mut L, sum: &mut Vec3) -> bool {
-    let l = list.next_light();
+fn shade_next<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, pos: &mut u32, sum: &mut Vec3) -> bool {
+    let (l, next) = list.step(*pos);
     if l == NO_LIGHT {
         return false;
     }
+    *pos = next;
     *sum += lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, &lights[l as usize], effects);
     true
+}
+
+/// The colour of geometry pixel `i` of a deferred pass: its surface from the G-buffer, the sum
+/// over `list` ([`shade_lights`], unrolled), [`output_colour`] with the list's length for the
+/// heatmap. The whole per-pixel work of the clustered techniques once they have found the
+/// pixel's list.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightList>(
+    p: &FrameParams,
+    bounds: &[f32],
+    i: u32,
+    depth: &[f32],
+    normals: &[u32],
+    albedo: &[u32],
+    materials: &[MaterialGpu],
+    lights: &[PointLight],
+    list: &L,
+) -> u32 {
+    let surface = fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
+    let mut sum = Vec3::ZERO;
+    let count = shade_lights::<SPECULAR, true, L>(&surface, p.effects, lights, list, &mut sum);
+    output_colour(p, bounds, i, &surface, sum, count)
 }
 
 /// Display colour (linear RGB) of a shaded pixel in the views every technique has: the

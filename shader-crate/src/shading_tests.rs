@@ -28,7 +28,7 @@ fn direct(s: &Surface, lights: &[PointLight], effects: u32) -> Vec3 {
 /// The loop over all lights (the deferred list), in a variant.
 fn looped<const SPECULAR: bool>(s: &Surface, lights: &[PointLight], frame_effects: u32) -> Vec3 {
     let mut sum = Vec3::ZERO;
-    let n = shade_lights::<SPECULAR, true, _>(s, frame_effects, lights, &mut light_range(0, lights.len() as u32), &mut sum);
+    let n = shade_lights::<SPECULAR, true, _>(s, frame_effects, lights, &light_range(0, lights.len() as u32), &mut sum);
     assert_eq!(n, lights.len() as u32);
     sum
 }
@@ -85,7 +85,21 @@ fn the_specular_bit_is_the_variants() {
     assert_eq!(variant_effects::<true>(u32::MAX), u32::MAX);
 }
 
-/// Every cursor walks its list once, in order, then stays at `NO_LIGHT`; the loop visits exactly
+/// The lights of `list` in order, stepping until `NO_LIGHT`; the end stays the end.
+fn walk<L: LightList>(list: &L) -> Vec<u32> {
+    let (mut pos, mut out) = (list.start(), Vec::new());
+    loop {
+        let (l, next) = list.step(pos);
+        if l == NO_LIGHT {
+            assert_eq!(list.step(pos).0, NO_LIGHT, "the end stays the end");
+            return out;
+        }
+        out.push(l);
+        pos = next;
+    }
+}
+
+/// Every list walks its entries once, in order, then stays at `NO_LIGHT`; the loop visits exactly
 /// the listed lights at every length around its 16-light iterations (and one light per
 /// iteration), and a forward+ linked list gives the sum of the same lights in list order.
 #[test]
@@ -99,14 +113,9 @@ fn cursors_walk_exactly_their_lists() {
         let mut buffer = vec![NO_LIGHT; first as usize];
         buffer.extend(&list);
         buffer.push(7); // past the range: never read
-        let mut range = index_range(first, len, |t| buffer[t as usize]);
-        let walked: Vec<u32> = core::iter::from_fn(|| Some(range.next_light()).filter(|&l| l != NO_LIGHT)).collect();
-        assert_eq!(walked, list, "range of {len}");
-        assert_eq!((range.next_light(), range.next_light()), (NO_LIGHT, NO_LIGHT));
-        let mut lights_range = light_range(first, len);
-        let walked: Vec<u32> = core::iter::from_fn(|| Some(lights_range.next_light()).filter(|&l| l != NO_LIGHT)).collect();
-        assert_eq!(walked, (first..first + len).collect::<Vec<_>>(), "lights {first}..+{len}");
-        assert_eq!(lights_range.next_light(), NO_LIGHT);
+        let range = index_range(first, len, |t| buffer[t as usize]);
+        assert_eq!(walk(&range), list, "range of {len}");
+        assert_eq!(walk(&light_range(first, len)), (first..first + len).collect::<Vec<_>>(), "lights {first}..+{len}");
         // Linked: nodes in scrambled slots, pushed on the head like the culling does (last first).
         let mut slots: Vec<u32> = (0..len + 3).collect();
         for k in (1..slots.len()).rev() {
@@ -120,17 +129,18 @@ fn cursors_walk_exactly_their_lists() {
             nodes[2 * node as usize + 1] = head;
             head = node;
         }
+        assert_eq!(walk(&linked_lights(head, &nodes)), list, "linked list of {len}");
         let chosen: Vec<PointLight> = list.iter().map(|&l| lights[l as usize]).collect();
         let want = direct(s, &chosen, EFFECT_INVERSE_SQUARE_CUT | EFFECT_SPECULAR);
         // The Forward+ fragment shader walks it one light per iteration; unrolled the same.
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, false, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(shade_lights::<true, false, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
         assert_eq!(sum, want, "linked list of {len}");
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
         assert_eq!(sum, want, "linked list of {len}, unrolled");
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &mut index_range(first, len, |t| buffer[t as usize]), &mut sum), len);
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &index_range(first, len, |t| buffer[t as usize]), &mut sum), len);
         assert_eq!(sum, want, "range of {len}");
     }
 }
@@ -143,8 +153,8 @@ fn a_list_in_parts_sums_like_one_list() {
     for s in surfaces.iter().step_by(7) {
         let split = rng.below(lights.len() as u32);
         let mut parts = Vec3::ZERO;
-        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &mut light_range(0, split), &mut parts);
-        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &mut light_range(split, lights.len() as u32 - split), &mut parts);
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &light_range(0, split), &mut parts);
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &light_range(split, lights.len() as u32 - split), &mut parts);
         assert_eq!(parts, looped::<true>(s, &lights, EFFECT_SPECULAR));
     }
 }

@@ -117,8 +117,8 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
             if px.geo[slot as usize] != 0 {
                 let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
                 let list = &*s;
-                let mut tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
-                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, lights, &mut tile_list, &mut sums[slot as usize]);
+                let tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
+                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, lights, &tile_list, &mut sums[slot as usize]);
             }
             slot += 1;
         }
