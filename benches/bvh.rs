@@ -104,7 +104,7 @@ fn bvh(c: &mut Criterion) {
     let naive_max = sizes("MANYLIGHTS_BVH_CPU_NAIVE_MAX", &[100_000])[0];
     for n in sizes("MANYLIGHTS_BVH_CPU_LIGHTS", &[1_000, 10_000, 100_000, 1_000_000]) {
         for (dist, l) in distributions(&scene, n) {
-            let lights_view = render::lights_to_view(input.view, &l);
+            let lights_view = render::lights_to_view(&input.view, &l).expect("lights within the shading contract");
             let p = shaders::layout::FrameParams { num_lights: n as u32, ..render::reference::cpu_params(&rb) };
             let branching = 32;
             g.bench_function(BenchmarkId::new(format!("cpu bvh {dist}"), n), |b| {

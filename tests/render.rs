@@ -5,6 +5,7 @@
 mod common;
 use common::pixels::{lit, worst_channel};
 use common::render::{asset_scene, city, frame, render_error};
+use common::scenes::hard_light_cases;
 use host::gpu::Gpu;
 use host::render::sort::SortKind;
 use host::render::{reference, Frame, Settings, Technique};
@@ -128,28 +129,13 @@ fn page_table_compaction_at_odd_resolutions() {
     }
 }
 
+/// The hard light cases (`common::scenes::hard_light_cases`; every technique's images are
+/// compared in tests/hard_cases.rs): the clustered lists stay exact with every BVH variant.
 #[test]
 fn hard_cases_stay_finite_and_equal() {
     let gpu = common::gpu();
     let scene = city();
-    let cam = scene.camera.position.to_array();
-    let fwd = (scene.camera.target - scene.camera.position).normalize();
-    let at = |t: f32| (scene.camera.position + fwd * t).to_array();
-    let light = |position: [f32; 3], radius: f32| PointLight { position, radius, colour: [1.0, 0.9, 0.8], intensity: 20.0 };
-    let diag = (scene.bounds.1 - scene.bounds.0).length();
-    let behind = (scene.camera.position - fwd * 5.0).to_array();
-    let cases: Vec<(&str, Vec<PointLight>)> = vec![
-        ("camera inside a light", vec![light(cam, 30.0)]),
-        ("lights behind the camera", (0..50).map(|i| light(behind, 2.0 + i as f32 * 0.1)).collect()),
-        ("straddling the near plane", vec![light(at(scene.camera.near), 3.0)]),
-        ("beyond the far plane", vec![light(at(scene.camera.far * 1.5), scene.camera.far)]),
-        ("zero radius", vec![light(at(10.0), 0.0), light(at(20.0), 0.0)]),
-        ("radius larger than the scene", vec![light(at(30.0), 10.0 * diag)]),
-        ("all lights at one point", (0..2000).map(|_| light(at(25.0), 15.0)).collect()),
-        ("10k lights at one point", (0..10_000).map(|_| light(at(40.0), 4.0)).collect()),
-        ("zero lights", vec![]),
-    ];
-    for (what, l) in &cases {
+    for (what, l) in &hard_light_cases(&scene) {
         let f = assert_equal_to_reference(&gpu, &scene, l, 128, 72, what);
         if *what == "all lights at one point" {
             assert!(f.regrowths >= 1, "2000 coincident lights overflow the first light-list guess and must grow it");
@@ -157,19 +143,13 @@ fn hard_cases_stay_finite_and_equal() {
     }
 }
 
+/// A one-pixel frame (the 7680×4320 frame, on every technique, is in tests/hard_cases.rs).
 #[test]
-fn one_pixel_and_8k_frames() {
+fn one_pixel_frame() {
     let gpu = common::gpu();
     let scene = city();
     let l = lights::uniform(&scene, 64, 11).unwrap();
     assert_equal_to_reference(&gpu, &scene, &l, 1, 1, "1x1");
-    // 7680×4320: the largest hard case; few lights keep the brute-force reference affordable.
-    let f = frame(&gpu, &scene, &l, &Settings { read_back: false, ..settings(7680, 4320, Technique::ClusteredNaive) });
-    assert_eq!(f.pixels.len(), 7680 * 4320);
-    let d = frame(&gpu, &scene, &l, &Settings { read_back: false, ..settings(7680, 4320, Technique::Deferred) });
-    let worst = d.pixels.iter().zip(&f.pixels).filter(|(a, b)| a != b).count();
-    assert_eq!(worst, 0, "8K: clustered and deferred differ in {worst} pixels");
-    common::assert_clean(&gpu);
 }
 
 #[test]

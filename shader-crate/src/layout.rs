@@ -186,7 +186,8 @@ const _: () = assert!(core::mem::size_of::<ClusterAabb>() == 32);
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
 pub struct RasterCamera {
-    /// World → view.
+    /// World → view rotation alone: vertex positions arrive relative to the eye (the host draws
+    /// camera-relative).
     pub view: [[f32; 4]; 4],
     /// View → clip: reversed-Z, infinite far, y flipped for Vulkan (`clip = (f/a·x, −f·y, near, −z)`).
     pub proj: [[f32; 4]; 4],

@@ -17,9 +17,10 @@
 //!
 //! # Lights: the host's contract
 //!
-//! Lights reach the GPU validated by the host: finite view-space position, colour and intensity
-//! (`≥ 0`, `colour·intensity` far below `f32::MAX`), radius `0` or in `[2^-50, 2^60]` (so that
-//! `r²·2^-19` is a normal float and `r²` is finite). Larger radii are still handled with IEEE
+//! Lights reach the GPU validated by the host (`render::lights_to_view`): finite view-space
+//! position, colour and intensity `≥ 0` with every `colour·intensity ≤` [`MAX_EMISSION`] (else an
+//! error), radius `0` or in `[`[`MIN_RADIUS`]`, `[`MAX_RADIUS`]`] = [2^-50, 2^60]` (clamped there, so
+//! that `r²·2^-19` is a normal float and `r²` is finite). Larger radii are still handled with IEEE
 //! semantics (CPU; tested with `1e30`): `r²` overflows to `+∞`, every light test is true and the
 //! falloff becomes `1/(d² + 1)` — but a GPU may assume no `∞`, hence the host clamp.
 //! Vulkan lets a compiler assume no NaN/∞ by default, so NaN handling on the GPU cannot be relied
@@ -75,6 +76,16 @@
 //! Every factor is bounded (`falloff ≤ 1`, `n·l ≤ 1 + 3u`, the lobe `≤ (2228/8π)·(1+3u)^2220
 //! < 89`), so the result is finite whenever the light's `colour·intensity` and the albedo are.
 //!
+//! # HDR overflow: one clamp, in [`shade`]
+//!
+//! Each light's radiance is clamped per channel to [`MAX_LIGHT_RADIANCE`] `= 2^90`. With
+//! `colour·intensity ≤` [`MAX_EMISSION`] `= 2^120` (host contract) nothing inside [`shade`]
+//! overflows (`≤ 89.1·2^120 < 2^127`), and a sum of fewer than `2^32` clamped contributions stays
+//! `< 2^122`: no technique's per-pixel sum can reach `+∞` whatever its order or list, since
+//! every one adds up [`shade`]'s results (a GPU may assume no `∞`, so none must arise). The clamp
+//! never changes an image: `2^90` is far past the tonemapper's saturation (`exposure·x ≥ 8` for
+//! any exposure `≥ 2^-87`), so a clamped channel is white as the exact sum would be.
+//!
 //! # Tonemap and encoding
 //!
 //! [`tonemap`]: per channel, the ACES filmic curve as fitted by Narkowicz 2015 ("ACES Filmic Tone
@@ -96,6 +107,24 @@ pub const SPHERE_TEST_SLACK: f32 = 1.0 / 524_288.0;
 /// Squared lengths at or below this are treated as zero when normalising (far above the denormal
 /// range, so CPU and flushing GPUs agree; `sqrt` of it is `10⁻¹⁵`).
 pub const MIN_LENGTH2: f32 = 1e-30;
+
+/// `2^e` for a normal-range exponent, exactly.
+const fn pow2(e: i32) -> f32 {
+    f32::from_bits(((e + 127) as u32) << 23)
+}
+
+/// Largest `colour·intensity` (per channel) a light may have: [`shade`] stays finite below it
+/// (module docs, "HDR overflow"). `2^120 ≈ 1.3·10^36`.
+pub const MAX_EMISSION: f32 = pow2(120);
+
+/// Largest radiance one light adds to a channel ([`shade`] clamps to it): `2^90 ≈ 1.2·10^27`, so
+/// that fewer than `2^32` lights cannot sum past `f32::MAX` (module docs, "HDR overflow").
+pub const MAX_LIGHT_RADIANCE: f32 = pow2(90);
+
+/// Radius range the kernels compute with (`r²·2^-19` normal, `r²` finite): `[2^-50, 2^60]`. The
+/// host clamps larger radii to `MAX_RADIUS` and smaller non-zero ones to 0 (module docs).
+pub const MAX_RADIUS: f32 = pow2(60);
+pub const MIN_RADIUS: f32 = pow2(-50);
 
 /// Roughness range of the BRDF (`s = 2/ρ² − 2` ∈ [0, 2220]).
 pub const MIN_ROUGHNESS: f32 = 0.03;
@@ -228,7 +257,8 @@ pub fn shininess(roughness: f32) -> f32 {
 /// Radiance towards the eye from surface point `p` (view space) with normal `n`, lit by `light`:
 /// normalised Blinn-Phong (module docs) times the light's colour, intensity and [`falloff`].
 /// The specular lobe only with `effects & EFFECT_SPECULAR`. Exactly 0 when `!light_touches`;
-/// finite for every finite input, including `p = 0`, `n = 0`, `p = c`, `r = 0`, `r = 1e30`.
+/// finite for every finite input, including `p = 0`, `n = 0`, `p = c`, `r = 0`, `r = 1e30`;
+/// each channel at most [`MAX_LIGHT_RADIANCE`] (module docs, "HDR overflow").
 #[inline]
 pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     shade_variant::<true>(p, n, albedo, specular, roughness, light, effects)
@@ -265,7 +295,7 @@ pub fn shade_variant<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specu
         }
     }
     let e = ndotl * att * light.intensity;
-    (albedo * INV_PI + Vec3::splat(spec)) * Vec3::from_array(light.colour) * e
+    ((albedo * INV_PI + Vec3::splat(spec)) * Vec3::from_array(light.colour) * e).min(Vec3::splat(MAX_LIGHT_RADIANCE))
 }
 
 /// ACES fitted curve (Narkowicz 2015) of one channel, `x` clamped to [0, 8] (NaN → 0), result

@@ -4,6 +4,8 @@
 //! - [`assets`]: where Sponza and the bunny are, and what a test does without them;
 //! - [`render`]: test settings, one frame, the scenes;
 //! - [`pixels`]: frame comparison;
+//! - [`compare`]: every technique against a reference, a CPU shading of a read-back frame;
+//! - [`scenes`]: the hard light cases and the geometry the built-in scenes lack;
 //! - [`csv`]: CSV files read by column name;
 //! - [`cli`]: running the binary, one-line errors;
 //! - [`spirv`]: entry points of a SPIR-V module;
@@ -11,9 +13,11 @@
 #![allow(dead_code)]
 pub mod assets;
 pub mod cli;
+pub mod compare;
 pub mod csv;
 pub mod pixels;
 pub mod render;
+pub mod scenes;
 pub mod spirv;
 pub mod temp;
 

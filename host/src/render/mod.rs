@@ -9,6 +9,11 @@
 //! frames, growth and re-run (at most [`technique::MAX_REGROWTHS`] times; a frame never drops a
 //! light), per-pass medians and the read-back for CPU checks.
 //!
+//! Every technique draws camera-relative: lights are moved to view space and vertices to the eye
+//! in f64 on the CPU, so scenes far from the world origin render as at the origin
+//! (`camera_relative.rs`, with the precision that remains; `light_contract.rs` checks each light
+//! against what the kernels assume).
+//!
 //! ## How to add a technique
 //! 1. Write `render/<name>.rs`: a struct with a constructor `fn(&Gpu, &FrameInputs) ->
 //!    Result<Self>` (allocate, check limits) and an `impl LightingTechnique` (at least `record`
@@ -21,12 +26,14 @@
 //!    (`--techniques all`) and the tests that iterate [`Technique::ALL`] pick it up from there.
 pub mod bitonic;
 pub mod bvh;
+pub mod camera_relative;
 pub mod clustered;
 pub mod clustered_aabb;
 pub mod deferred;
 pub mod forward_plus;
 pub mod gbuffer;
 pub mod legend;
+pub mod light_contract;
 pub mod reference;
 pub mod scan;
 pub mod sort;
@@ -38,7 +45,7 @@ use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler, Queue};
 use anyhow::{bail, Context as _, Result};
 pub use gbuffer::{Draw, TextureData};
-use glam::Mat4;
+pub use camera_relative::{lights_to_view, ViewTransform};
 use shaders::cluster_key::{slice_bounds, ClusterGrid};
 use shaders::layout::*;
 use technique::{FrameInputs, LightingTechnique, MAX_REGROWTHS};
@@ -92,7 +99,8 @@ techniques! {
     ForwardPlus = "forward-plus" => forward_plus::ForwardPlus::new,
 }
 
-/// Scene data as the renderer consumes it (world space; lights validated).
+/// Scene data as the renderer consumes it (world space; lights are checked by
+/// [`lights_to_view`]).
 pub struct SceneInput<'a> {
     pub positions: &'a [[f32; 3]],
     pub normals: &'a [[f32; 3]],
@@ -103,7 +111,8 @@ pub struct SceneInput<'a> {
     pub lights: &'a [PointLight],
     /// Textures the draws index (`Draw::albedo_texture` / `mask_texture`).
     pub textures: Vec<TextureData<'a>>,
-    pub view: Mat4,
+    /// World → view, in f64: the renderer draws camera-relative ([`camera_relative`]).
+    pub view: ViewTransform,
     pub fov_y_radians: f32,
     pub near: f32,
     pub far: f32,
@@ -141,6 +150,8 @@ pub struct Readback {
     pub depth: Vec<u32>,
     /// Decoded G-buffer normal per pixel (as the shading passes read it).
     pub normals: Vec<[f32; 3]>,
+    /// G-buffer albedo word per pixel (RGBA8 albedo, material index in alpha).
+    pub albedo: Vec<u32>,
     pub keys: Vec<u32>,
     pub unique: Vec<u32>,
     pub counts: Vec<u32>,
@@ -200,14 +211,6 @@ pub fn specular_variant(p: &FrameParams) -> usize {
 /// Lights per pixel at the top of the heatmap ramp.
 pub const HEAT_MAX: u32 = 64;
 
-/// Lights in view space.
-pub fn lights_to_view(view: Mat4, lights: &[PointLight]) -> Vec<PointLight> {
-    lights
-        .iter()
-        .map(|l| PointLight { position: view.transform_point3(l.position.into()).to_array(), ..*l })
-        .collect()
-}
-
 /// Renders one frame (plus `settings.frames` timed repetitions).
 pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> {
     let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
@@ -234,12 +237,13 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         );
     }
     let n = s.width * s.height;
-    let geometry = gbuffer::Geometry::upload(ctx, scene.positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
+    let lights_view = lights_to_view(&scene.view, scene.lights)?;
+    let positions = scene.view.relative_positions(scene.positions);
+    let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
         .context("uploading geometry")?;
-    let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view, scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
+    let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
     let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
     let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
-    let lights_view = lights_to_view(scene.view, scene.lights);
     let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
     let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
     let bounds = slice_bounds(&grid);
@@ -323,8 +327,9 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             .chunks(precision.gbuffer_words() as usize)
             .map(|w| shaders::octahedral::decode([w[0], w.get(1).copied().unwrap_or(0), w.get(2).copied().unwrap_or(0)], precision))
             .collect();
+        let albedo: Vec<u32> = targets.albedo_buf.read(n as usize)?;
         let c = cluster_lists.unwrap_or(technique::ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
-        Some(Readback { depth, normals, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds })
+        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds })
     } else {
         None
     };

@@ -9,7 +9,7 @@
 //!
 //! Memory: one copy of the scene's vertices and indices (the renderer uploads from it).
 use super::{Scene, TextureKind};
-use crate::render::{Draw, SceneInput, TextureData};
+use crate::render::{Draw, SceneInput, TextureData, ViewTransform};
 use anyhow::{bail, Result};
 use shaders::layout::{DrawParams, MaterialGpu, PointLight, MAX_MATERIALS};
 use shaders::octahedral::Precision;
@@ -85,7 +85,7 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
             .iter()
             .map(|t| TextureData { width: t.width, height: t.height, rgba8: &t.rgba8, srgb: t.kind == TextureKind::Albedo })
             .collect(),
-        view: c.view(),
+        view: ViewTransform::look_at(c.position.as_dvec3(), c.target.as_dvec3(), c.up.as_dvec3()),
         fov_y_radians: c.fov_y_degrees.to_radians(),
         near: c.near,
         far: c.far,

@@ -12,7 +12,7 @@
 //! that loads has passed [`Scene::validate`]: every number the renderer reads is finite and in
 //! range. [`flatten`] adapts a scene to the renderer.
 use anyhow::{bail, Context as _, Result};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use shaders::layout::{PointLight, EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
 use std::path::{Path, PathBuf};
 
@@ -122,12 +122,6 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// World → view: right-handed look-at; the camera looks down −z in view space, +y is up.
-    /// (`up` need not be normalised; call on a [`validate`](Self::validate)d camera.)
-    pub fn view(&self) -> Mat4 {
-        glam::camera::rh::view::look_at_mat4(self.position, self.target, self.up.normalize())
-    }
-
     /// A camera on `direction` from the centre of `bounds` that fits the bounding sphere
     /// (radius `R` = half the diagonal) into the vertical field of view: distance
     /// `d = 1.05·R / sin(fov/2)`, `near = max(d − R, 0.01·R)·0.5`, `far = (d + R)·1.5`.
@@ -339,16 +333,7 @@ impl Scene {
             }
         }
         for (i, l) in self.lights.iter().enumerate() {
-            let values = l.position.iter().chain(&l.colour).chain([&l.radius, &l.intensity]);
-            if values.into_iter().any(|v| !v.is_finite()) {
-                bail!("light {i} has a non-finite value: {l:?}");
-            }
-            if l.radius < 0.0 {
-                bail!("light {i} has a negative radius {}", l.radius);
-            }
-            if l.intensity < 0.0 || l.colour.iter().any(|&c| c < 0.0) {
-                bail!("light {i} has a negative colour or intensity: {l:?}");
-            }
+            crate::render::light_contract::check(i, l)?;
         }
         if lights::MAX_LIGHTS < self.lights.len() {
             bail!("scene has {} lights, more than the {} supported", self.lights.len(), lights::MAX_LIGHTS);

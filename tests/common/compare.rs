@@ -1,0 +1,68 @@
+//! Comparing frames across techniques: every technique against a reference image, and a CPU
+//! shading of a read-back G-buffer.
+use super::pixels::worst_channel;
+use super::render::frame;
+use host::gpu::Gpu;
+use host::render::{reference, Frame, Settings, Technique};
+use host::scene::flatten::flatten;
+use host::scene::Scene;
+use shaders::layout::PointLight;
+
+/// Largest per-channel difference (of 255) allowed between a technique and the reference.
+pub const TOLERANCE: u32 = 1;
+
+/// Renders `scene` with each of `techniques` (otherwise `s`) and asserts every image within
+/// [`TOLERANCE`] of `reference`; with `s.read_back`, the clustered techniques' lists are also
+/// checked against the CPU ([`reference::check`]). One frame is alive at a time (8K frames).
+pub fn assert_techniques_match(gpu: &Gpu, reference: &[u32], scene: &Scene, lights: &[PointLight], s: &Settings, techniques: &[Technique], what: &str) {
+    for &t in techniques {
+        let f = frame(gpu, scene, lights, &Settings { technique: t, ..s.clone() });
+        let worst = worst_channel(reference, &f.pixels);
+        assert!(worst <= TOLERANCE, "{what}, {t:?}: differs from the reference by {worst}/255");
+        if let Some(rb) = f.readback.as_ref().filter(|rb| !rb.keys.is_empty()) {
+            reference::check(rb).unwrap_or_else(|e| panic!("{what}, {t:?}: {e:#}"));
+        }
+    }
+    super::assert_clean(gpu);
+}
+
+/// Renders the brute-force reference (`deferred`) and asserts that every other technique equals
+/// it ([`assert_techniques_match`]); returns the reference frame.
+pub fn assert_every_technique_equals_deferred(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings, what: &str) -> Frame {
+    let reference = frame(gpu, scene, lights, &Settings { technique: Technique::Deferred, ..s.clone() });
+    let others: Vec<Technique> = Technique::ALL.iter().copied().filter(|&t| t != Technique::Deferred).collect();
+    assert_techniques_match(gpu, &reference.pixels, scene, lights, s, &others, what);
+    reference
+}
+
+/// Pixels showing geometry (reversed-Z depth above 0) in a read-back frame.
+pub fn geometry_pixels(f: &Frame) -> usize {
+    f.readback.as_ref().expect("a read-back frame").depth.iter().filter(|&&d| f32::from_bits(d) > 0.0).count()
+}
+
+/// The frame as the CPU shades it from the frame's read-back G-buffer (depth, decoded normals,
+/// albedo and material) and view-space lights: every light that touches a pixel, through
+/// `lighting::shade` and the output encoding, in f32 like the GPU. What every technique must
+/// show (within [`TOLERANCE`]).
+pub fn cpu_shaded(scene: &Scene, f: &Frame, s: &Settings) -> Vec<u32> {
+    use shaders::lighting::{encode_srgb8, light_touches, shade, tonemap};
+    use shaders::reconstruct::{distance_from_depth, is_background, view_position};
+    let rb = f.readback.as_ref().expect("a read-back frame");
+    let materials = flatten(scene, s.normal_precision).unwrap().materials;
+    let effects = scene.effects.flags();
+    let g = &f.grid;
+    (0..rb.depth.len())
+        .map(|i| {
+            let depth = f32::from_bits(rb.depth[i]);
+            if is_background(depth) {
+                return shaders::shading::BACKGROUND_RGBA8;
+            }
+            let p = view_position(g, i as u32 % g.width, i as u32 / g.width, distance_from_depth(g.near, depth));
+            let n = glam::Vec3::from_array(rb.normals[i]);
+            let (albedo, m) = shaders::shading::gbuffer_albedo(rb.albedo[i]);
+            let mat = materials[m as usize];
+            let sum = rb.lights_view.iter().filter(|l| light_touches(l, p)).fold(glam::Vec3::ZERO, |sum, l| sum + shade(p, n, albedo, mat.specular, mat.roughness, l, effects));
+            encode_srgb8(tonemap(sum, s.exposure))
+        })
+        .collect()
+}
