@@ -135,6 +135,8 @@ mod tests {
             timestamp_period_ns: 1.0,
             timestamp_valid_bits: 64,
             async_timestamp_valid_bits: 0,
+            timestamps_across_queues: false,
+            calibrated_timestamps_ext: false,
             max_shared_memory_bytes: 48 << 10,
             max_storage_buffer_range: range,
             max_image_dimension_2d: image,

@@ -157,8 +157,17 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);
     }
     crate::debug_frame::save_png(&a.frame.out, a.frame.width, a.frame.height, &frame.pixels)?;
+    let queue = |t: &crate::vk::PassTiming| if t.queue == crate::vk::Queue::Main { "" } else { ", async-compute queue" };
     for t in &frame.timings {
-        eprintln!("{:<12} {:9.3} ms (GPU, median of {})", t.name, t.ms, a.frames.max(1));
+        eprintln!("{:<12} {:9.3} ms (GPU, median of {}{})", t.name, t.ms, a.frames.max(1), queue(t));
+    }
+    let g = &frame.gpu_frame;
+    if g.timed {
+        let bound = if g.across_queues { "" } else { " (at least: this device's queues keep separate time lines)" };
+        eprintln!("{:<12} {:9.3} ms (GPU, first to last timestamp over both queues{bound})", "frame", g.ms);
+        if g.async_ms > 0.0 {
+            eprintln!("{:<12} {:9.3} ms main queue, {:.3} ms async-compute queue, {:.3} ms overlapped", "", g.main_ms, g.async_ms, g.overlap_ms);
+        }
     }
     if let Some(path) = &a.stats {
         let json = render::stats::stats_json(&gpu.ctx.info, &scene.name, scene.lights.len(), &settings, &frame);

@@ -75,6 +75,10 @@ pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade
 // Device-wide scan fix-ups (`entries.rs`).
 pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("entries::scan_add_offsets", 2);
 pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("entries::scan_store_total", 2, [1, 1, 1], false);
+/// Indirect dispatch arguments from a GPU counter (`indirect.rs`).
+pub const INDIRECT_ARGS: Kernel<IndirectParams> = Kernel::new("entries::indirect_args", 2, [1, 1, 1], false);
+/// The grand total of a scan over a GPU-counted prefix (`render::scan`, `entries.rs`).
+pub const SCAN_COUNTED_TOTAL: Kernel<CountedTotalParams> = Kernel::new("entries::scan_counted_total", 3, [1, 1, 1], false);
 
 // Radix sort (`entries.rs`, `radix.rs`): cooperative (workgroup barriers).
 pub const RADIX_HISTOGRAM: Kernel<RadixParams> = Kernel::new("entries::radix_histogram", 2, [256, 1, 1], true);
@@ -134,6 +138,8 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_DEFERRED_SPECULAR.erased(),
     SCAN_ADD_OFFSETS.erased(),
     SCAN_STORE_TOTAL.erased(),
+    INDIRECT_ARGS.erased(),
+    SCAN_COUNTED_TOTAL.erased(),
     RADIX_HISTOGRAM.erased(),
     RADIX_SCATTER.erased(),
     LIGHT_KEYS.erased(),

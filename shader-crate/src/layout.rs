@@ -305,6 +305,39 @@ pub struct ScanFixParams {
 }
 const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
 
+/// `indirect_args`: `levels` dispatch argument triples for `counters[counter] · scale` items,
+/// `items_per_group · growth^l` per workgroup at level `l` (the levels of a device-wide scan),
+/// written from word `offset` of the arguments buffer (`shaders::indirect`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct IndirectParams {
+    pub counter: u32,
+    pub scale: u32,
+    pub items_per_group: u32,
+    pub growth: u32,
+    /// Word offset of the first `VkDispatchIndirectCommand` in the arguments buffer.
+    pub offset: u32,
+    pub levels: u32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<IndirectParams>() == 32);
+
+/// `scan_counted_total`: `counters[total] = output[n − 1] + input[n − 1]` for the
+/// `n = min(counters[count] · scale, capacity)` elements a counted scan scanned (0 for none).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct CountedTotalParams {
+    pub count: u32,
+    pub scale: u32,
+    pub total: u32,
+    /// Elements the scanned buffers hold: a count past it (a frame about to grow its buffers)
+    /// is cut there.
+    pub capacity: u32,
+}
+const _: () = assert!(core::mem::size_of::<CountedTotalParams>() == 16);
+
 /// `radix_histogram` / `radix_scatter` kernels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]

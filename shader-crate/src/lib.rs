@@ -68,6 +68,7 @@ pub mod deferred;
 pub mod entries;
 #[cfg(feature = "compute")]
 pub mod forward_plus;
+pub mod indirect;
 pub mod layout;
 pub mod light_bvh;
 #[cfg(feature = "compute")]

@@ -109,17 +109,10 @@ fn pass(f: &Frame, name: &str) -> f64 {
     f.timings.iter().filter(|t| t.name == name).map(|t| t.ms).sum()
 }
 
-/// Frame and compute ms as in the sweep (main queue; compute = without raster).
+/// Frame and compute ms as in the sweep: the whole GPU frame over both queues, and the frame
+/// without its raster passes.
 fn frame_ms(f: &Frame) -> (f64, f64) {
-    let main = f.timings.iter().filter(|t| f.on_main_queue(&t.name));
-    let (mut frame, mut compute) = (0.0, 0.0);
-    for t in main {
-        frame += t.ms;
-        if !t.raster {
-            compute += t.ms;
-        }
-    }
-    (frame, compute)
+    (f.gpu_frame.ms, f.gpu_frame.non_raster_ms)
 }
 
 /// Runs the study on each scene of `a.scenes` at the light count closest to 10k in `a.lights`.

@@ -16,10 +16,10 @@
 //!    table, the speed-up table at 10k lights against each baseline (Karas' Table 1), the stage
 //!    breakdown, the skips.
 //!
-//! The "frame" stage is the sum of the main queue's passes (async-compute passes that overlap
-//! the raster are not added; each pass row says its `queue`); "compute" is the frame without its
-//! raster passes (each pass row says its `kind`), because a GPU may give raster work only part of the
-//! chip (the H100 runs it on 2 of its TPCs) — both are reported.
+//! The "frame" stage is the whole GPU frame: first to last timestamp over both queues
+//! (`render::frame_time`; each pass row says its `queue`); "compute" is the frame without the
+//! main queue's raster passes (each pass row says its `kind`), because a GPU may give raster work
+//! only part of the chip (the H100 and H200 run it on 2 of their TPCs) — both are reported.
 pub mod accuracy;
 pub mod plots;
 pub mod report;
@@ -42,13 +42,15 @@ pub const CSV_COLUMNS: [&str; 16] = [
     "light_lists", "lights_per_list_mean", "lights_per_list_max",
 ];
 
-/// `queue` of a pass row: the queue it ran on (the "frame" and "compute" sums: `main`).
+/// `queue` of a pass row: the queue it ran on (the "frame" and "compute" rows: `all`, both).
 pub const QUEUE_MAIN: &str = "main";
 pub const QUEUE_ASYNC: &str = "async-compute";
-/// `kind` of a row: a raster pass, a compute pass (dispatches, copies), or one of the sums.
+pub const QUEUE_ALL: &str = "all";
+/// `kind` of a row: a raster pass, a compute pass (dispatches, copies), or a span of the whole
+/// frame ("frame", "compute").
 pub const KIND_RASTER: &str = "raster";
 pub const KIND_COMPUTE: &str = "compute";
-pub const KIND_SUM: &str = "sum";
+pub const KIND_SPAN: &str = "span";
 
 /// Seconds every sweep spends warming the GPU up before its first recorded configuration.
 pub const WARM_UP_SECONDS: f64 = 10.0;
@@ -104,9 +106,9 @@ pub struct Row {
     pub lights: usize,
     pub frames: u32,
     pub stage: String,
-    /// [`QUEUE_MAIN`] or [`QUEUE_ASYNC`].
+    /// [`QUEUE_MAIN`], [`QUEUE_ASYNC`] or [`QUEUE_ALL`].
     pub queue: &'static str,
-    /// [`KIND_RASTER`], [`KIND_COMPUTE`] or [`KIND_SUM`].
+    /// [`KIND_RASTER`], [`KIND_COMPUTE`] or [`KIND_SPAN`].
     pub kind: &'static str,
     pub median_ms: f64,
     pub min_ms: f64,
@@ -133,6 +135,9 @@ pub struct Skip {
 #[derive(Clone, Debug, Default)]
 pub struct Results {
     pub device: String,
+    /// The device's queues share one timestamp time line, so "frame" spans both queues exactly
+    /// (otherwise it is the longer queue's span, a lower bound).
+    pub frame_spans_queues: bool,
     pub command: String,
     pub rows: Vec<Row>,
     pub skips: Vec<Skip>,
@@ -226,12 +231,11 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
             row(&p.name, queue, if p.raster { KIND_RASTER } else { KIND_COMPUTE }, p.ms, lo, hi)
         })
         .collect();
-    let sum = |f: &dyn Fn(&Row) -> f64, raster: bool| -> f64 {
-        rows.iter().filter(|p| p.queue == QUEUE_MAIN).filter(|p| raster || p.kind != KIND_RASTER).map(f).sum()
-    };
-    // Sums of medians (the per-frame sums were not kept): min and max sum the passes' extremes.
-    let frame_row = row("frame", QUEUE_MAIN, KIND_SUM, sum(&|r| r.median_ms, true), sum(&|r| r.min_ms, true), sum(&|r| r.max_ms, true));
-    let compute_row = row("compute", QUEUE_MAIN, KIND_SUM, sum(&|r| r.median_ms, false), sum(&|r| r.min_ms, false), sum(&|r| r.max_ms, false));
+    // The whole GPU frame over both queues (render::frame_time), and the frame without its
+    // raster passes: medians of the per-frame values, with their extremes.
+    let g = &frame.gpu_frame;
+    let frame_row = row("frame", QUEUE_ALL, KIND_SPAN, g.ms, g.min_ms, g.max_ms);
+    let compute_row = row("compute", QUEUE_ALL, KIND_SPAN, g.non_raster_ms, g.non_raster_min_ms, g.non_raster_max_ms);
     rows.push(frame_row);
     rows.push(compute_row);
     Ok(rows)
@@ -254,7 +258,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
     let bar = indicatif::ProgressBar::new(total).with_style(
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let mut out = Results { device: gpu.ctx.info.line(), command, ..Default::default() };
+    let mut out = Results { device: gpu.ctx.info.line(), frame_spans_queues: gpu.ctx.info.timestamps_across_queues, command, ..Default::default() };
     // Warm-up: a GPU idle before the sweep starts at low clocks and ramps up over seconds; one
     // warm-up frame per configuration does not undo that for the first configurations. On a cold
     // H100, 2 s of deferred frames left Forward+'s first configuration (raster-bound) 2× slow,

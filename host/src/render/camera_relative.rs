@@ -106,7 +106,8 @@ mod tests {
     /// (`view · p` with the translation in the matrix) does not.
     #[test]
     fn exact_offsets_transform_identically() {
-        let points = [[1.5f32, 0.25, -7.0], [-30.0, 12.0, -100.0], [3.0, 2.0, 9.0]];
+        // Whole metres: exact at both offsets (f32 spacing at 10^7 m is 1 m).
+        let points = [[1.0f32, 0.0, -7.0], [-30.0, 12.0, -100.0], [3.0, 2.0, 9.0]];
         let base = camera(DVec3::ZERO);
         for offset in [1e5, 1e7] {
             let moved = camera(DVec3::splat(offset));
@@ -121,8 +122,8 @@ mod tests {
         // The f32 matrix path at 10^7 m is off by about a metre.
         let (eye, target) = (Vec3::new(3.0, 2.0, 10.0) + Vec3::splat(1e7), Vec3::new(-4.0, 1.0, -20.0) + Vec3::splat(1e7));
         let view = glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y);
-        let p = Vec3::new(1.5, 0.25, -7.0) + Vec3::splat(1e7);
-        let err = (view.transform_point3(p) - base.to_view([1.5, 0.25, -7.0])).length();
+        let p = Vec3::new(1.0, 0.0, -7.0) + Vec3::splat(1e7);
+        let err = (view.transform_point3(p) - base.to_view([1.0, 0.0, -7.0])).length();
         assert!(err > 0.05, "f32 view·p at 1e7 should be visibly wrong, error {err}");
     }
 

@@ -5,9 +5,12 @@
 //! 2. **keys** — cluster key per pixel (`clustered::pixel_keys`): 32 px tiles × exponential
 //!    depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
 //! 3. **page table** — mark pages → scan (allocate) → record → store slots → scan → compact
-//!    into the sorted unique-cluster list (`page_table`), all sized from the resolution.
+//!    into the sorted unique-cluster list (`page_table`). Marking and allocation are sized from
+//!    the resolution; the slot scan and the compaction cover the pages the frame allocated
+//!    (indirect dispatches from the GPU's page counter, `scan::DeviceScan::record_counted`).
 //! 4. **assignment** — per unique cluster, its lights as counts → scan → fill; offsets + counts
-//!    give each cluster's list. `clustered-naive` tests every light against the cluster's AABB;
+//!    give each cluster's list. All three run for the frame's unique clusters (indirect
+//!    dispatches from the GPU's cluster counter), never for the buffers' capacity. `clustered-naive` tests every light against the cluster's AABB;
 //!    `clustered-bvh` walks the light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary
 //!    node boxes, on the async-compute queue, overlapping the G-buffer raster).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
@@ -20,7 +23,7 @@
 //! light reference; scan scratch ≈ 1/128 of what it scans; the BVH (`bvh.rs`).
 use super::bvh::LightBvh;
 use super::gbuffer::Targets;
-use super::scan::DeviceScan;
+use super::scan::{Counted, DeviceScan};
 use super::technique::{grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
@@ -140,6 +143,10 @@ impl Capacities {
     }
 }
 
+/// Word offsets of the indirect dispatches in `ClusterBuffers::dispatch_args`.
+const ARGS_COMPACT: u32 = 0;
+const ARGS_ASSIGNMENT: u32 = 3;
+
 struct ClusterBuffers {
     pub caps: Capacities,
     page_count: u32,
@@ -155,6 +162,9 @@ struct ClusterBuffers {
     pub offsets: Buffer,
     pub list: Buffer,
     pub counters: Buffer,
+    /// Workgroup counts written on the GPU from its counters (`VkDispatchIndirectCommand`s):
+    /// [`ARGS_COMPACT`] for the allocated slots, [`ARGS_ASSIGNMENT`] for the unique clusters.
+    dispatch_args: Buffer,
     page_scan: DeviceScan,
     slot_scan: DeviceScan,
     cluster_scan: DeviceScan,
@@ -186,6 +196,7 @@ impl ClusterBuffers {
             offsets: words("light offsets", max_clusters)?,
             list: words("light lists", caps.light_refs)?,
             counters: words("counters", COUNTERS)?,
+            dispatch_args: words("indirect dispatches", 6)?,
             page_scan: DeviceScan::new(gpu, "pages", pages)?,
             slot_scan: DeviceScan::new(gpu, "slots", slots)?,
             cluster_scan: DeviceScan::new(gpu, "clusters", max_clusters)?,
@@ -230,31 +241,48 @@ impl ClusterBuffers {
             self.page_scan.record(gpu, rec, &self.marks, &self.page_base, self.page_count, Some((&self.counters, COUNTER_PAGES)))?;
             rec.dispatch_linear(&k.record_pages, &[&self.marks, &self.page_base, &self.page_of_alloc], &with(self.page_count), self.page_count)?;
             rec.dispatch_linear(&k.store_slots, &[&self.keys, &self.page_base, &self.slots], p, n)?;
+            // The slots of the allocated pages only: scanned and compacted for the pages counted.
+            let allocated = Counted { counter: COUNTER_PAGES, scale: PAGE_SIZE };
+            self.slot_scan.record_counted(gpu, rec, &self.slots, &self.slot_rank, &self.counters, allocated, Some(COUNTER_UNIQUE_CLUSTERS))?;
+            let compact = k.compact_clusters.kernel.invocations();
+            let a = IndirectParams { counter: COUNTER_PAGES, scale: PAGE_SIZE, items_per_group: compact, growth: 1, offset: ARGS_COMPACT, levels: 1, _pad: [0; 2] };
+            rec.indirect_args(&k.indirect_args, &self.counters, &self.dispatch_args, &a)?;
             let slots = self.caps.slots();
-            self.slot_scan.record(gpu, rec, &self.slots, &self.slot_rank, slots, Some((&self.counters, COUNTER_UNIQUE_CLUSTERS)))?;
-            rec.dispatch_linear(&k.compact_clusters, &[&self.slots, &self.slot_rank, &self.page_of_alloc, &self.unique], &with(slots), slots)
+            rec.dispatch_indirect(&k.compact_clusters, &[&self.slots, &self.slot_rank, &self.page_of_alloc, &self.unique], &with(slots), &self.dispatch_args, ARGS_COMPACT)
         })?;
         let c = with(self.max_clusters);
         rec.pass("assignment", |rec| {
-            let m = self.max_clusters;
+            // Workgroups for the frame's unique clusters, not for the buffers' capacity.
+            let args = &self.dispatch_args;
             let walk = bvh.map(|b| (b, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
+            let per_group = match walk {
+                None => k.cluster_light_counts.kernel.invocations(),
+                Some(_) => rec.subgroup_items_per_group(&k.cluster_light_counts_bvh),
+            };
+            let p = IndirectParams { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1, items_per_group: per_group, growth: 1, offset: ARGS_ASSIGNMENT, levels: 1, _pad: [0; 2] };
+            rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
             match walk {
-                None => rec.dispatch_linear(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, m)?,
-                Some((b, w)) => rec.dispatch_subgroups(
+                None => rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,
+                Some((b, w)) => rec.dispatch_indirect(
                     &k.cluster_light_counts_bvh,
                     &[&self.unique, &self.counters, bounds, lights, &self.counts, &b.order, &b.nodes],
                     &w,
-                    m,
+                    args,
+                    ARGS_ASSIGNMENT,
                 )?,
             }
-            self.cluster_scan.record(gpu, rec, &self.counts, &self.offsets, m, Some((&self.counters, COUNTER_LIGHT_REFS)))?;
+            // Offsets of the unique clusters only (entries past them are never read), and the
+            // light references they sum to.
+            let unique = Counted { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1 };
+            self.cluster_scan.record_counted(gpu, rec, &self.counts, &self.offsets, &self.counters, unique, Some(COUNTER_LIGHT_REFS))?;
             match walk {
-                None => rec.dispatch_linear(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, m),
-                Some((b, w)) => rec.dispatch_subgroups(
+                None => rec.dispatch_indirect(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
+                Some((b, w)) => rec.dispatch_indirect(
                     &k.cluster_light_fill_bvh,
                     &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list, &b.order, &b.nodes],
                     &w,
-                    m,
+                    args,
+                    ARGS_ASSIGNMENT,
                 ),
             }
         })?;

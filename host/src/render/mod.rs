@@ -31,6 +31,7 @@ pub mod clustered;
 pub mod clustered_aabb;
 pub mod deferred;
 pub mod forward_plus;
+pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
@@ -165,6 +166,9 @@ pub struct Readback {
 /// A rendered frame.
 pub struct Frame {
     pub pixels: Vec<u32>,
+    /// The whole GPU frame over both queues (first to last timestamp), medians over the timed
+    /// frames ([`frame_time`]).
+    pub gpu_frame: frame_time::FrameTime,
     /// Median GPU milliseconds per pass over the timed frames (or of the single frame).
     pub timings: Vec<PassTiming>,
     /// (min, max) GPU milliseconds of each pass of `timings` over the timed frames.
@@ -181,19 +185,11 @@ pub struct Frame {
     pub readback: Option<Readback>,
     pub grid: ClusterGrid,
     /// The technique's light-only passes (`clustered-bvh`: light sort and BVH build) ran on the
-    /// async-compute queue, overlapping the G-buffer raster; the main queue's passes then account
-    /// for the frame's time.
+    /// async-compute queue, overlapping the G-buffer raster ([`Frame::gpu_frame`] spans both).
     pub overlapped: bool,
 }
 
 impl Frame {
-    /// Whether pass `name` ran on the main queue (every pass, except those an overlapped frame ran
-    /// on the async-compute queue): the main queue's passes, waits included, make up the frame's
-    /// time.
-    pub fn on_main_queue(&self, name: &str) -> bool {
-        self.timings.iter().find(|t| t.name == name).is_none_or(|t| t.queue == Queue::Main)
-    }
-
     /// Whether pass `name` recorded raster work (the G-buffer, Forward+'s depth pre-pass and
     /// forward pass): only part of a GPU may run raster work, so raster and compute are reported
     /// apart.
@@ -286,6 +282,8 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let mut profiler = Profiler::new(ctx, 16)?;
     let mut async_profiler = Profiler::new_async(ctx, 4)?;
     let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
+    let mut frame_samples: Vec<frame_time::FrameSample> = Vec::new();
+    let across_queues = ctx.info.timestamps_across_queues;
     let (mut f, mut regrowths) = (0, 0);
     while f <= s.frames {
         gpu.ctx.run_overlapped(
@@ -310,6 +308,8 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         if f > 0 || s.frames == 0 {
             let mut t = async_profiler.results()?;
             t.extend(profiler.results()?);
+            let raster_ms = t.iter().filter(|p| p.raster && p.queue == Queue::Main).map(|p| p.ms).sum();
+            frame_samples.extend(frame_time::sample(profiler.span_ms()?, async_profiler.span_ms()?, across_queues, raster_ms));
             timings_all.push(t);
         }
         f += 1;
@@ -336,6 +336,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let (timings, timing_spread) = median_timings(&timings_all);
     Ok(Frame {
         pixels,
+        gpu_frame: frame_time::median(&frame_samples, across_queues),
         timings,
         timing_spread,
         unique_clusters: lists.clusters,

@@ -1,5 +1,5 @@
-//! The `--stats` JSON: device, resolution, light count, per-pass GPU milliseconds (median of the
-//! timed frames), bytes per buffer, unique clusters, lights per cluster and per pixel.
+//! The `--stats` JSON: device, resolution, light count, the whole GPU frame over both queues and
+//! per-pass GPU milliseconds with their queue (medians of the timed frames), bytes per buffer, unique clusters, lights per cluster and per pixel.
 use super::reference::list_stats;
 use super::{Frame, Settings};
 use crate::vk::DeviceInfo;
@@ -13,9 +13,9 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         lists.max_per_pixel = lights as u32;
     }
     let passes: serde_json::Map<String, Value> = frame.timings.iter().map(|t| (t.name.clone(), json!(t.ms))).collect();
-    // Overlapped async-compute passes run beside the main queue's: the main queue's passes
-    // (which include any wait for them) make up the frame.
-    let total: f64 = frame.timings.iter().filter(|t| frame.on_main_queue(&t.name)).map(|t| t.ms).sum();
+    let queues: serde_json::Map<String, Value> =
+        frame.timings.iter().map(|t| (t.name.clone(), json!(if t.queue == crate::vk::Queue::Main { "main" } else { "async-compute" }))).collect();
+    let g = &frame.gpu_frame;
     let buffers: serde_json::Map<String, Value> = frame.buffers.iter().map(|(n, b)| (n.clone(), json!(b))).collect();
     json!({
         "device": { "name": device.name, "kind": device.kind, "driver": format!("{} {}", device.driver_name, device.driver_info),
@@ -27,7 +27,12 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "slices": frame.grid.num_slices,
         "lights": lights,
         "timed_frames": s.frames,
-        "gpu_ms": { "passes": passes, "total": total, "async_compute": frame.overlapped },
+        "gpu_ms": {
+            "passes": passes, "pass_queues": queues,
+            // The whole GPU frame: first to last timestamp over both queues (render::frame_time).
+            "frame": g.ms, "frame_min": g.min_ms, "frame_max": g.max_ms, "frame_without_raster": g.non_raster_ms,
+            "main_queue": g.main_ms, "async_queue": g.async_ms, "overlap": g.overlap_ms,
+            "frame_spans_queues": g.across_queues, "async_compute": frame.overlapped },
         "bytes": { "buffers": buffers, "total": frame.buffers.iter().map(|b| b.1).sum::<u64>() },
         "clusters": { "unique": frame.unique_clusters, "pages": frame.pages, "light_references": frame.light_refs, "regrowths": frame.regrowths },
         "lights_per_cluster": { "mean": lists.mean_per_cluster, "max": lists.max_per_cluster },

@@ -50,7 +50,8 @@ impl std::ops::Deref for Context {
 impl Context {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
         let instance = Instance::new(opts.validation)?;
-        let (physical, info) = device::select(&instance.raw, opts.device.as_deref())?;
+        let (physical, mut info) = device::select(&instance.raw, opts.device.as_deref())?;
+        info.timestamps_across_queues = device::device_time_domain(&instance.entry, &instance.raw, physical, &info);
         let device = device::create(&instance.raw, physical, &info)?;
         let queue = unsafe { device.get_device_queue(info.graphics_family, 0) };
         let async_compute_queue =

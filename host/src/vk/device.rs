@@ -27,6 +27,14 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// Valid timestamp bits of the async-compute family (0: no timestamps there, or no family).
     pub async_timestamp_valid_bits: u32,
+    /// Timestamps of different queues share one time line, so a frame can be timed from its first
+    /// to its last timestamp across queues. Vulkan compares timestamps only within one queue
+    /// unless the device offers the *device* time domain of calibrated timestamps
+    /// (`VK_KHR/EXT_calibrated_timestamps`), whose values "are comparable with device timestamp
+    /// values captured using vkCmdWriteTimestamp" on any queue ([`device_time_domain`]).
+    pub timestamps_across_queues: bool,
+    /// The device advertises `VK_EXT_calibrated_timestamps` (its time domains are then queried).
+    pub calibrated_timestamps_ext: bool,
     pub max_shared_memory_bytes: u32,
     pub max_storage_buffer_range: u32,
     /// Largest width or height of a 2D image (`maxImageDimension2D`; lavapipe: 16384).
@@ -102,6 +110,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
         .call("vkEnumerateDeviceExtensionProperties")?;
     let has_push = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(khr::push_descriptor::NAME));
+    let calibrated_timestamps_ext = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::calibrated_timestamps::NAME));
 
     let gfx = families.iter().position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
     let async_compute = families
@@ -128,6 +137,8 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         timestamp_period_ns: p.limits.timestamp_period,
         timestamp_valid_bits: gfx.map(|g| families[g].timestamp_valid_bits).unwrap_or(0),
         async_timestamp_valid_bits: async_compute.map(|f| families[f].timestamp_valid_bits).unwrap_or(0),
+        timestamps_across_queues: false,
+        calibrated_timestamps_ext,
         max_shared_memory_bytes: p.limits.max_compute_shared_memory_size,
         max_storage_buffer_range: p.limits.max_storage_buffer_range,
         max_image_dimension_2d: p.limits.max_image_dimension2_d,
@@ -164,6 +175,18 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     }
     let why = (!missing.is_empty()).then(|| missing.join(", "));
     Ok((info, rank, why))
+}
+
+/// Whether `pd` offers the device time domain of calibrated timestamps (see
+/// [`DeviceInfo::timestamps_across_queues`]); false where the extension is absent or the query fails.
+pub fn device_time_domain(entry: &ash::Entry, instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo) -> bool {
+    if !info.calibrated_timestamps_ext {
+        return false;
+    }
+    let calibrated = ash::ext::calibrated_timestamps::Instance::new(entry, instance);
+    // SAFETY: the device advertises the extension, so the loader resolves this command for it.
+    let domains = unsafe { calibrated.get_physical_device_calibrateable_time_domains(pd) };
+    domains.is_ok_and(|d| d.contains(&vk::TimeDomainKHR::DEVICE))
 }
 
 /// A physical device, its info, its type rank (0 = discrete) and why it is unusable (None: usable).

@@ -14,11 +14,13 @@ pub use gpu_allocator::MemoryLocation;
 /// Smallest buffer made (bytes).
 pub const MIN_BUFFER_BYTES: u64 = 16;
 
-/// Usage of every storage buffer: read/written by kernels, copied to/from staging.
+/// Usage of every storage buffer: read/written by kernels, copied to/from staging, and read as
+/// indirect dispatch arguments written by a kernel.
 pub const STORAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
     vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
         | vk::BufferUsageFlags::TRANSFER_SRC.as_raw()
-        | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
+        | vk::BufferUsageFlags::TRANSFER_DST.as_raw()
+        | vk::BufferUsageFlags::INDIRECT_BUFFER.as_raw(),
 );
 
 pub struct Buffer {
@@ -184,13 +186,14 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer, src_access: vk::AccessFlag
         vk::AccessFlags::SHADER_READ
             | vk::AccessFlags::SHADER_WRITE
             | vk::AccessFlags::TRANSFER_READ
-            | vk::AccessFlags::TRANSFER_WRITE,
+            | vk::AccessFlags::TRANSFER_WRITE
+            | vk::AccessFlags::INDIRECT_COMMAND_READ,
     );
     unsafe {
         ctx.device.cmd_pipeline_barrier(
             cmd,
             src_stage,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::DRAW_INDIRECT,
             vk::DependencyFlags::empty(),
             &[b],
             &[],

@@ -116,14 +116,7 @@ impl<P> Drop for ComputePipeline<P> {
     }
 }
 
-/// Workgroups per dispatch axis (Vulkan guarantees 65 535).
-pub const MAX_GROUPS_PER_AXIS: u32 = 65_535;
-
-/// `groups` workgroups as a 2D grid whose linear index covers them all.
-pub fn fold(groups: u32) -> [u32; 3] {
-    let gx = groups.clamp(1, MAX_GROUPS_PER_AXIS);
-    [gx, groups.div_ceil(gx).max(1), 1]
-}
+pub use shaders::indirect::{fold, MAX_GROUPS_PER_AXIS};
 
 /// The barrier [`Recorder::dispatch`] records after every dispatch: the dispatch's shader writes
 /// become visible to later compute shaders and copies, which wait for it.
@@ -154,6 +147,46 @@ impl Recorder<'_> {
     /// Dispatches `groups` workgroups of `pipe` with `buffers` at bindings `0..n` and `params`
     /// as push constants, then a barrier.
     pub fn dispatch<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, groups: [u32; 3]) -> VkResult<()> {
+        let limit = MAX_GROUPS_PER_AXIS;
+        if groups.iter().any(|&g| g > limit) {
+            return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("dispatch of {groups:?} workgroups exceeds {limit} per axis") });
+        }
+        if groups.contains(&0) {
+            return self.check_bindings(pipe, buffers);
+        }
+        self.bind(pipe, buffers, params)?;
+        unsafe { self.ctx.device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]) };
+        dispatch_barrier(self.ctx, self.cmd);
+        Ok(())
+    }
+
+    /// Dispatches `pipe` with the workgroup counts a kernel wrote at word `offset` of `args`
+    /// (`shaders::indirect::dispatch_args`, through [`Recorder::indirect_args`]), then a barrier.
+    pub fn dispatch_indirect<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, args: &Buffer, offset: u32) -> VkResult<()> {
+        if 4 * (offset as u64 + 3) > args.size {
+            return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("indirect arguments at word {offset} past the end of {}", args.name) });
+        }
+        self.bind(pipe, buffers, params)?;
+        unsafe { self.ctx.device.cmd_dispatch_indirect(self.cmd, args.raw, 4 * offset as u64) };
+        dispatch_barrier(self.ctx, self.cmd);
+        Ok(())
+    }
+
+    /// Writes indirect dispatch arguments computed from a GPU counter into `args` (what and
+    /// where: [`shaders::layout::IndirectParams`]).
+    pub fn indirect_args(&mut self, pipe: &ComputePipeline<shaders::layout::IndirectParams>, counters: &Buffer, args: &Buffer, p: &shaders::layout::IndirectParams) -> VkResult<()> {
+        if 4 * (p.offset as u64 + 3 * p.levels as u64) > args.size {
+            return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("{} argument triples at word {} past the end of {}", p.levels, p.offset, args.name) });
+        }
+        self.dispatch(pipe, &[counters, args], p, [1, 1, 1])
+    }
+
+    /// Items of a subgroup-per-item kernel each workgroup covers ([`Recorder::dispatch_subgroups`]).
+    pub fn subgroup_items_per_group<P>(&self, pipe: &ComputePipeline<P>) -> u32 {
+        (pipe.kernel.invocations() / self.ctx.info.max_subgroup_size.max(1)).max(1)
+    }
+
+    fn check_bindings<P>(&self, pipe: &ComputePipeline<P>, buffers: &[&Buffer]) -> VkResult<()> {
         let k = &pipe.kernel;
         if buffers.len() != k.storage_buffers as usize {
             return Err(VkError::Kernel {
@@ -161,13 +194,12 @@ impl Recorder<'_> {
                 what: format!("binds {} storage buffers, {} given", k.storage_buffers, buffers.len()),
             });
         }
-        let limit = MAX_GROUPS_PER_AXIS;
-        if groups.iter().any(|&g| g > limit) {
-            return Err(VkError::Kernel { entry: k.entry, what: format!("dispatch of {groups:?} workgroups exceeds {limit} per axis") });
-        }
-        if groups.contains(&0) {
-            return Ok(());
-        }
+        Ok(())
+    }
+
+    /// Binds `pipe`, pushes `buffers` at bindings `0..n` and `params` as push constants.
+    fn bind<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P) -> VkResult<()> {
+        self.check_bindings(pipe, buffers)?;
         let d = &self.ctx.device;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
             buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
@@ -189,9 +221,7 @@ impl Recorder<'_> {
             if std::mem::size_of::<P>() > 0 {
                 d.cmd_push_constants(self.cmd, pipe.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(params));
             }
-            d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
-        dispatch_barrier(self.ctx, self.cmd);
         Ok(())
     }
 
@@ -214,7 +244,7 @@ impl Recorder<'_> {
     /// subgroup width (fewest subgroups per workgroup), so every item is covered whatever width
     /// the driver picks; surplus subgroups find no item and return.
     pub fn dispatch_subgroups<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, items: u32) -> VkResult<()> {
-        let per_group = (pipe.kernel.invocations() / self.ctx.info.max_subgroup_size.max(1)).max(1);
+        let per_group = self.subgroup_items_per_group(pipe);
         self.dispatch(pipe, buffers, params, fold(items.div_ceil(per_group)))
     }
 

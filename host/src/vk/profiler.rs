@@ -1,8 +1,9 @@
 //! GPU timestamp profiler: per-pass milliseconds from `vkCmdWriteTimestamp`.
 //!
 //! A pass is bracketed by a top-of-pipe and a bottom-of-pipe timestamp; the difference times the
-//! device's `timestampPeriod` is the pass's GPU time. Devices whose queue reports no valid
-//! timestamp bits get a disabled profiler (no timings, never a wrong one).
+//! device's `timestampPeriod` is the pass's GPU time. The submission's span (first to last
+//! timestamp, gaps and waits between passes included) is what a frame costs a queue. Devices whose
+//! queue reports no valid timestamp bits get a disabled profiler (no timings, never a wrong one).
 use super::context::Context;
 use super::error::{CallContext, VkResult};
 use ash::vk;
@@ -103,8 +104,9 @@ impl Profiler {
         }
     }
 
-    /// The timings of the last submission (call after it completed).
-    pub fn results(&self) -> VkResult<Vec<PassTiming>> {
+    /// The raw timestamps of the last submission's passes (begin, end per pass), masked to the
+    /// valid bits; empty when disabled or nothing was timed. Call after the submission completed.
+    fn raw(&self) -> VkResult<Vec<u64>> {
         if !self.enabled() || self.names.is_empty() {
             return Ok(Vec::new());
         }
@@ -115,18 +117,41 @@ impl Profiler {
                 .get_query_pool_results(self.pool, 0, &mut raw, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT)
         }
         .call("vkGetQueryPoolResults")?;
-        let bits = self.bits;
-        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
-        let period = self.ctx.info.timestamp_period_ns as f64;
+        let mask = self.mask();
+        Ok(raw.into_iter().map(|t| t & mask).collect())
+    }
+
+    fn mask(&self) -> u64 {
+        if self.bits >= 64 { u64::MAX } else { (1u64 << self.bits) - 1 }
+    }
+
+    /// The timings of the last submission (call after it completed).
+    pub fn results(&self) -> VkResult<Vec<PassTiming>> {
+        let raw = self.raw()?;
+        let (mask, period) = (self.mask(), self.ctx.info.timestamp_period_ns as f64);
         Ok(self
             .names
             .iter()
             .enumerate()
+            .take(raw.len() / 2)
             .map(|(i, n)| {
-                let ticks = (raw[2 * i + 1] & mask).wrapping_sub(raw[2 * i] & mask) & mask;
+                let ticks = raw[2 * i + 1].wrapping_sub(raw[2 * i]) & mask;
                 PassTiming { name: n.clone(), ms: ticks as f64 * period * 1e-6, queue: self.queue, raster: self.raster[i] }
             })
             .collect())
+    }
+
+    /// The last submission's span on the device's time line: (first timestamp, last timestamp)
+    /// in milliseconds of device ticks, `None` when nothing was timed. The end is unwrapped
+    /// past the start where the counter wrapped. Spans of different queues are comparable only
+    /// where [`DeviceInfo::timestamps_across_queues`](super::DeviceInfo::timestamps_across_queues).
+    pub fn span_ms(&self) -> VkResult<Option<(f64, f64)>> {
+        let raw = self.raw()?;
+        let Some(&start) = raw.first() else { return Ok(None) };
+        let mask = self.mask();
+        let longest = raw.iter().map(|&t| t.wrapping_sub(start) & mask).max().unwrap_or(0);
+        let period = self.ctx.info.timestamp_period_ns as f64 * 1e-6;
+        Ok(Some((start as f64 * period, (start as f64 + longest as f64) * period)))
     }
 }
 
