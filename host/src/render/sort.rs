@@ -70,14 +70,14 @@ pub enum SortKind {
 
 /// The light sort of `clustered-bvh`: one of the two GPU key–value sorts, same interface.
 pub enum LightSorter {
-    Radix(RadixSort),
+    Radix(Box<RadixSort>),
     Bitonic(Box<super::bitonic::BitonicSort>),
 }
 
 impl LightSorter {
     pub fn new(gpu: &Gpu, kind: SortKind, capacity: u32) -> VkResult<Self> {
         Ok(match kind {
-            SortKind::Radix => Self::Radix(RadixSort::new(gpu, capacity)?),
+            SortKind::Radix => Self::Radix(Box::new(RadixSort::new(gpu, capacity)?)),
             SortKind::Bitonic => Self::Bitonic(Box::new(super::bitonic::BitonicSort::new(gpu, capacity)?)),
         })
     }
