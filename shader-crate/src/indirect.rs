@@ -18,11 +18,10 @@ pub fn fold(groups: u32) -> [u32; 3] {
 }
 
 /// `a · b`, or `u32::MAX` where that overflows (`u32::saturating_mul`, which rust-gpu cannot
-/// compile).
+/// compile; 32-bit arithmetic only).
 #[inline]
 pub fn saturating_mul(a: u32, b: u32) -> u32 {
-    let x = a as u64 * b as u64;
-    if x > u32::MAX as u64 { u32::MAX } else { x as u32 }
+    if b != 0 && a > u32::MAX / b { u32::MAX } else { a * b }
 }
 
 /// Indirect dispatch arguments for `items` items of `items_per_group` per workgroup: no workgroup

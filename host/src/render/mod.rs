@@ -291,12 +291,11 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             Some(&mut profiler),
             Some(&mut async_profiler),
             |rec| tech.record_async(gpu, rec, &inputs),
-            |rec| {
-                if tech.uses_gbuffer() {
-                    rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets))?;
-                }
-                tech.record(gpu, rec, &inputs)
+            |rec| match tech.uses_gbuffer() {
+                true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets)),
+                false => Ok(()),
             },
+            |rec| tech.record(gpu, rec, &inputs),
         )?;
         if let Some(grown) = tech.grow_if_needed(gpu)? {
             regrowths += 1;

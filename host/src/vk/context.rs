@@ -119,30 +119,37 @@ impl Context {
         self.submit_and_wait(|cmd| f(&mut Recorder::new(self, cmd, profiler)))
     }
 
-    /// Records `on_async` for the async-compute queue and `on_main` for the graphics queue, which
-    /// waits for it before its first compute shader (its raster passes overlap the async work);
-    /// waits for both. Passes of `on_async` are timed by `async_profiler`. Without an async-compute
-    /// queue (or with `overlap` false) both go into one command buffer, `on_async` first, timed by
-    /// `profiler`.
-    pub fn run_overlapped<A, B>(
+    /// Records `on_async` for the async-compute queue, and `on_main_first` then `on_main` for the
+    /// graphics queue; waits for all. `on_main_first` (the raster passes) is its own submission,
+    /// which does not wait; `on_main` is a second one that waits for the async work (a semaphore).
+    /// A semaphore wait can hold a whole submission back whatever its stage mask (NVIDIA's driver
+    /// did, so nothing overlapped), hence the split: the raster runs beside the async work.
+    /// Passes of `on_async` are timed by `async_profiler`, both main submissions by `profiler`.
+    /// Without an async-compute queue (or with `overlap` false) everything goes into one command
+    /// buffer, `on_main_first`, `on_async`, `on_main` in that order, timed by `profiler`.
+    pub fn run_overlapped<A, B, C>(
         &self,
         overlap: bool,
         profiler: Option<&mut Profiler>,
         async_profiler: Option<&mut Profiler>,
         on_async: impl FnOnce(&mut Recorder<'_>) -> VkResult<A>,
-        on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
-    ) -> VkResult<(A, B)> {
+        on_main_first: impl FnOnce(&mut Recorder<'_>) -> VkResult<B>,
+        on_main: impl FnOnce(&mut Recorder<'_>) -> VkResult<C>,
+    ) -> VkResult<(A, B, C)> {
         if !overlap || self.async_compute_queue.is_none() {
             return self.run(profiler, |rec| {
+                let b = on_main_first(rec)?;
                 let a = on_async(rec)?;
-                Ok((a, on_main(rec)?))
+                Ok((a, b, on_main(rec)?))
             });
         }
-        self.submit_overlapped_and_wait(
-            |cmd| on_async(&mut Recorder::new(self, cmd, async_profiler)),
-            |cmd| on_main(&mut Recorder::new(self, cmd, profiler)),
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-        )
+        self.submit_overlapped_and_wait(|cmd| on_async(&mut Recorder::new(self, cmd, async_profiler)), |first, second| {
+            let mut profiler = profiler;
+            let b = on_main_first(&mut Recorder::new(self, first, profiler.as_deref_mut()))?;
+            let c = on_main(&mut Recorder::continuing(self, second, profiler))?;
+            Ok((b, c))
+        })
+        .map(|r| r.map(|(a, (b, c))| (a, b, c)))
         .expect("an async-compute queue (checked above)")
     }
 
@@ -160,14 +167,14 @@ impl Context {
         result
     }
 
-    /// Overlapped submission: `record_async` goes to the async-compute queue, `record_main` to the
-    /// graphics+compute queue, which waits for the first (a semaphore) at `wait_stage` only — its
-    /// earlier stages (raster) run concurrently. Waits for both. `None` without an async queue.
+    /// Overlapped submission: `record_async` goes to the async-compute queue; `record_main`
+    /// records two command buffers for the graphics+compute queue, submitted in order: the first
+    /// runs beside the async work, the second waits for it (a semaphore, at the compute stage).
+    /// Waits for all three. `None` without an async queue.
     pub fn submit_overlapped_and_wait<A, B>(
         &self,
         record_async: impl FnOnce(vk::CommandBuffer) -> VkResult<A>,
-        record_main: impl FnOnce(vk::CommandBuffer) -> VkResult<B>,
-        wait_stage: vk::PipelineStageFlags,
+        record_main: impl FnOnce(vk::CommandBuffer, vk::CommandBuffer) -> VkResult<B>,
     ) -> Option<VkResult<(A, B)>> {
         let (Some(async_queue), Some(async_pool)) = (&self.async_compute_queue, &self.async_command_pool) else {
             return None;
@@ -177,35 +184,28 @@ impl Context {
         let main_pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
         let result = (|| {
             let semaphore = unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.call("vkCreateSemaphore")?;
-            let ca = match self.begin_commands(*async_pool) {
-                Ok(c) => c,
-                Err(e) => {
-                    unsafe { d.destroy_semaphore(semaphore, None) };
-                    return Err(e);
-                }
-            };
-            let cm = match self.begin_commands(*main_pool) {
-                Ok(c) => c,
-                Err(e) => {
-                    unsafe {
-                        d.free_command_buffers(*async_pool, &[ca]);
-                        d.destroy_semaphore(semaphore, None);
-                    }
-                    return Err(e);
-                }
-            };
+            let mut allocated: Vec<(vk::CommandPool, vk::CommandBuffer)> = Vec::new();
             let submitted = (|| {
+                for pool in [*async_pool, *main_pool, *main_pool] {
+                    allocated.push((pool, self.begin_commands(pool)?));
+                }
+                let (ca, cm1, cm2) = (allocated[0].1, allocated[1].1, allocated[2].1);
                 let a = record_async(ca)?;
-                unsafe { d.end_command_buffer(ca) }.call("vkEndCommandBuffer")?;
-                let b = record_main(cm)?;
-                unsafe { d.end_command_buffer(cm) }.call("vkEndCommandBuffer")?;
-                let wait = Some((semaphore, wait_stage));
-                self.submit_all_and_wait(&[(async_queue, ca, None, Some(semaphore)), (&self.queue, cm, wait, None)])?;
+                let b = record_main(cm1, cm2)?;
+                for c in [ca, cm1, cm2] {
+                    unsafe { d.end_command_buffer(c) }.call("vkEndCommandBuffer")?;
+                }
+                let wait = Some((semaphore, vk::PipelineStageFlags::COMPUTE_SHADER));
+                // The raster first, so it starts at once; the async work beside it; then the
+                // second main submission, which waits for the async work's signal (submitted
+                // before the wait, as binary semaphores require).
+                self.submit_all_and_wait(&[(&self.queue, cm1, None, None), (async_queue, ca, None, Some(semaphore)), (&self.queue, cm2, wait, None)])?;
                 Ok((a, b))
             })();
             unsafe {
-                d.free_command_buffers(*async_pool, &[ca]);
-                d.free_command_buffers(*main_pool, &[cm]);
+                for (pool, c) in allocated {
+                    d.free_command_buffers(pool, &[c]);
+                }
                 d.destroy_semaphore(semaphore, None);
             }
             submitted

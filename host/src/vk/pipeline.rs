@@ -98,7 +98,8 @@ impl<P: Pod> ComputePipeline<P> {
                     d.destroy_pipeline_layout(layout, None);
                     d.destroy_descriptor_set_layout(set_layout, None);
                 }
-                return Err(VkError::Call { call: "vkCreateComputePipelines", result });
+                // Name the kernel: a driver's compiler may refuse one entry of a module.
+                return Err(VkError::Kernel { entry: kernel.entry, what: format!("vkCreateComputePipelines failed: {result}") });
             }
         };
         ctx.set_name(raw, kernel.entry);
@@ -139,6 +140,12 @@ impl<'a> Recorder<'a> {
         if let Some(p) = profiler.as_deref_mut() {
             p.reset(cmd);
         }
+        Self { ctx, cmd, profiler, bound_graphics: vk::Pipeline::null() }
+    }
+
+    /// A recorder over `cmd` that goes on timing into `profiler` where an earlier command buffer
+    /// of the same queue left it (no reset: both submissions' passes are one frame's).
+    pub(crate) fn continuing(ctx: &'a Context, cmd: vk::CommandBuffer, profiler: Option<&'a mut Profiler>) -> Self {
         Self { ctx, cmd, profiler, bound_graphics: vk::Pipeline::null() }
     }
 }
