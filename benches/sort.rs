@@ -117,13 +117,7 @@ fn emulated_sort(c: &mut Criterion) {
             let values: Vec<u32> = (0..n as u32).collect();
             g.throughput(Throughput::Elements(n as u64));
             g.bench_with_input(BenchmarkId::new("emulated radix", n), &k, |b, k| {
-                b.iter(|| {
-                    let (mut k, mut v) = (k.clone(), values.clone());
-                    for p in 0..shaders::radix::passes(30) {
-                        (k, v) = shaders::radix::pass_emulated(width, &k, &v, p * shaders::radix::RADIX_BITS);
-                    }
-                    (k, v)
-                })
+                b.iter(|| shaders::radix::emulated::sort_emulated_with(width, k, &values, 30, shaders::radix::emulated::Path::Auto))
             });
             g.bench_with_input(BenchmarkId::new("emulated bitonic", n), &k, |b, k| {
                 b.iter(|| shaders::bitonic::emulated::sort_emulated(width, width, k, &values))

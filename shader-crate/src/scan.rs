@@ -45,13 +45,26 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
     shared: &mut S,
     value: u32,
 ) -> (u32, u32) {
+    workgroup_exclusive_scan_at(c, shared, 0, value)
+}
+
+/// [`workgroup_exclusive_scan`] using workgroup-memory words `at..at + SCAN_SHARED_WORDS`. A
+/// caller scanning twice in a row puts a workgroup barrier between the calls (the second call's
+/// first stores would race with the first call's last loads).
+#[inline]
+pub fn workgroup_exclusive_scan_at<C: Coop, S: SharedU32 + ?Sized>(
+    c: &C,
+    shared: &mut S,
+    at: u32,
+    value: u32,
+) -> (u32, u32) {
     let width = c.subgroup_size();
     let sg = c.subgroup_id();
     let groups = c.num_subgroups();
     // 1–2.
     let inclusive = subgroup_inclusive_scan(c, value);
     if c.lane() == width - 1 {
-        shared.store(sg, inclusive);
+        shared.store(at + sg, inclusive);
     }
     c.workgroup_barrier();
     // 3. Subgroup 0 scans the subgroup totals, W at a time.
@@ -60,10 +73,10 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
         let mut base = 0;
         while base < groups {
             let i = base + c.lane();
-            let v = if i < groups { shared.load(i) } else { 0 };
+            let v = if i < groups { shared.load(at + i) } else { 0 };
             let s = subgroup_inclusive_scan(c, v).wrapping_add(carry);
             if i < groups {
-                shared.store(i, s);
+                shared.store(at + i, s);
             }
             carry = c.shuffle(s, width - 1);
             base += width;
@@ -71,8 +84,8 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
     }
     c.workgroup_barrier();
     // 4.
-    let before = if sg > 0 { shared.load(sg - 1) } else { 0 };
-    let total = shared.load(groups - 1);
+    let before = if sg > 0 { shared.load(at + sg - 1) } else { 0 };
+    let total = shared.load(at + groups - 1);
     (before.wrapping_add(inclusive).wrapping_sub(value), total)
 }
 
