@@ -19,8 +19,9 @@
 //!       into `tile_count[digit · tiles + tile]`;
 //!    2. **spine** ([`spine`]) — the digit-major tile counts scanned in order give every
 //!       (digit, tile) its first output slot; the global histogram splits that scan between
-//!       1–256 workgroups (a workgroup's digits start at the sum of the lower digits' bins), so
-//!       a small input takes one workgroup and one dispatch, and no scan is multi-level;
+//!       1–256 workgroups (a workgroup's digits start at the sum of the lower digits' bins, a
+//!       workgroup reduction of at most 256 bins that stands in for a separate scan dispatch of
+//!       the histogram), so a small input takes one workgroup, and no scan is multi-level;
 //!    3. **downsweep** ([`downsweep_tile`]) — each tile ranks its keys by digit ([`rank_tile`]),
 //!       reorders keys and then values through workgroup memory, and writes each run of equal
 //!       digits contiguously (coalesced) at its (digit, tile) start.
@@ -39,15 +40,16 @@
 //! place in the tile: stable, so the passes compose into a sort. Works at every subgroup width
 //! 4…128 (ballots are 128 bits).
 //!
-//! **Why not a chained scan here.** Onesweep replaces steps 2.1–2.2 by a chained scan with
-//! decoupled look-back inside the downsweep (one read of the keys per pass instead of two): a
-//! workgroup waits for earlier tiles' counts, which needs forward progress between workgroups.
-//! Vulkan does not promise it, and lavapipe does not give it (workgroups run as tasks on a few
-//! threads, so a waiting workgroup can hold the thread the awaited one needs). Reduce-then-scan
-//! has no waits and runs on every device.
+//! **Two cross-tile variants.** Steps 2.1–2.3 (reduce-then-scan) read the keys twice per pass
+//! and no workgroup ever waits on another, so they run on every device. The chained variant
+//! ([`chained`], Onesweep's) does a pass in one dispatch that reads the keys once, but a
+//! workgroup waits for earlier tiles' counts, which needs forward progress between workgroups:
+//! Vulkan does not promise it, so the host picks it only where the device gives it in practice
+//! (`host/src/render/sort.rs`).
 //!
-//! Memory: keys + values double-buffered (8 B per pair of scratch), `4 · 256 · ⌈n / 2048⌉` B of
-//! tile counts and `4 · 4 · 256` B of global histogram: ≈ 8.5 B per pair.
+//! Memory: keys + values double-buffered (8 B per pair of scratch), two tables of
+//! `4 · 256 · ⌈n / 2048⌉` B (tile counts and starts: 0.5 B per pair each) and `4 · 4 · 256` B of
+//! global histogram: ≈ 9 B per pair.
 //!
 //! Workgroup memory of the tile kernels ([`RADIX_SHARED_WORDS`], 2624 words = 10.25 KiB;
 //! lavapipe allows 32 KiB, NVIDIA 48 KiB): the rank rows ([`RANK_ROWS`] · 256 words = 8 KiB),

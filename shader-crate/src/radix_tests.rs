@@ -116,7 +116,7 @@ fn spine_splits_by_size() {
     assert_eq!(spine_digits(100_000), 1);
     for tiles in [1, 2, 31, 32, 33, 512, 513, 8192] {
         let d = spine_digits(tiles);
-        assert!(d.is_power_of_two() && RADIX % d == 0);
+        assert!(d.is_power_of_two() && RADIX.is_multiple_of(d));
         assert!(d == 1 || d * tiles <= SPINE_COUNTS, "{tiles} tiles: {d} digits per workgroup");
     }
 }

@@ -89,32 +89,6 @@ pub fn workgroup_exclusive_scan_at<C: Coop, S: SharedU32 + ?Sized>(
     (before.wrapping_add(inclusive).wrapping_sub(value), total)
 }
 
-/// The host's device-wide exclusive scan (`host/src/render/scan.rs`) on the CPU at subgroup width
-/// `width`: level 0 scans workgroups of [`SCAN_WORKGROUP`] with [`workgroup_exclusive_scan`] in
-/// the lock-step emulation, the workgroup totals are scanned the same way (recursively) and
-/// added back. Returns the exclusive prefixes and the grand total.
-#[cfg(not(target_arch = "spirv"))]
-pub fn exclusive_scan_emulated(width: u32, input: &[u32]) -> (Vec<u32>, u32) {
-    use crate::coop::cpu::{run_workgroups, Emulation};
-    let n = input.len();
-    let groups = n.max(1).div_ceil(SCAN_WORKGROUP as usize);
-    let emu = Emulation { width, workgroup_size: SCAN_WORKGROUP, shared_words: SCAN_SHARED_WORDS };
-    let out = run_workgroups(emu, groups as u32, |g, c, s| {
-        let i = (g * SCAN_WORKGROUP + c.local_index()) as usize;
-        workgroup_exclusive_scan(c, s, input.get(i).copied().unwrap_or(0))
-    });
-    let mut prefix: Vec<u32> = out[..n].iter().map(|p| p.0).collect();
-    let totals: Vec<u32> = out.iter().step_by(SCAN_WORKGROUP as usize).map(|p| p.1).collect();
-    if groups == 1 {
-        return (prefix, totals[0]);
-    }
-    let (offsets, total) = exclusive_scan_emulated(width, &totals);
-    for (i, p) in prefix.iter_mut().enumerate() {
-        *p = p.wrapping_add(offsets[i / SCAN_WORKGROUP as usize]);
-    }
-    (prefix, total)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -165,24 +139,5 @@ mod tests {
             }
             c.shuffle(1, 0)
         });
-    }
-
-    /// The device-wide scan at every width, across one, two and three levels, partial groups
-    /// included.
-    #[test]
-    fn emulated_device_scan_equals_sequential() {
-        let mut x = 0x9e37_79b9u32;
-        for width in [4, 8, 16, 32, 64] {
-            for n in [0usize, 1, 255, 256, 257, 256 * 256, 256 * 256 + 3, 70_001] {
-                let input: Vec<u32> = (0..n).map(|_| { x ^= x << 13; x ^= x >> 17; x ^= x << 5; x % 1000 }).collect();
-                let (prefix, total) = exclusive_scan_emulated(width, &input);
-                let mut acc = 0u32;
-                for (i, &v) in input.iter().enumerate() {
-                    assert_eq!(prefix[i], acc, "width {width}, n {n}, element {i}");
-                    acc = acc.wrapping_add(v);
-                }
-                assert_eq!(total, acc, "width {width}, n {n}: total");
-            }
-        }
     }
 }

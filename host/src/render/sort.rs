@@ -57,7 +57,8 @@ pub struct RadixSort {
     values_tmp: Buffer,
     /// Global histogram, `MAX_PASSES × 256` counts.
     hist: Buffer,
-    tables: Tables,
+    /// Boxed: a variant's buffers would make `LightSorter::Radix` much larger than `Bitonic`.
+    tables: Box<Tables>,
 }
 
 /// Kernel name in the errors of [`RadixSort::record`].
@@ -94,13 +95,13 @@ impl RadixSort {
             keys_tmp: Buffer::storage(ctx, "sort keys (scratch)", 4 * pairs as u64)?,
             values_tmp: Buffer::storage(ctx, "sort values (scratch)", 4 * pairs as u64)?,
             hist: Buffer::storage(ctx, "sort histogram", 4 * (MAX_PASSES * RADIX) as u64)?,
-            tables,
+            tables: Box::new(tables),
         })
     }
 
     /// The variant this sort records.
     pub fn cross_tile(&self) -> CrossTile {
-        match self.tables {
+        match *self.tables {
             Tables::ReduceThenScan { .. } => CrossTile::ReduceThenScan,
             Tables::Chained { .. } => CrossTile::Chained,
         }
@@ -108,7 +109,7 @@ impl RadixSort {
 
     /// Bytes of scratch memory.
     pub fn bytes(&self) -> u64 {
-        let tables = match &self.tables {
+        let tables = match &*self.tables {
             Tables::ReduceThenScan { counts, starts } => counts.size + starts.size,
             Tables::Chained { status } => status.size,
         };
@@ -135,14 +136,14 @@ impl RadixSort {
             return rec.dispatch(&k.radix_sort_tile, &[keys, values], &p, [1, 1, 1]);
         }
         rec.fill(&self.hist, 0);
-        if let Tables::Chained { status } = &self.tables {
+        if let Tables::Chained { status } = &*self.tables {
             rec.fill(status, 0);
         }
         rec.dispatch(&k.radix_histogram, &[keys, &self.hist], &p, fold(n.div_ceil(HISTOGRAM_KEYS)))?;
         let (mut src, mut dst) = ((keys, values), (&self.keys_tmp, &self.values_tmp));
         for pass in 0..passes {
             p.pass = pass;
-            match &self.tables {
+            match &*self.tables {
                 Tables::ReduceThenScan { counts, starts } => {
                     rec.dispatch(&k.radix_upsweep, &[src.0, counts], &p, fold(tiles))?;
                     rec.dispatch(&k.radix_spine, &[&self.hist, counts, starts], &p, [RADIX / p.spine_digits, 1, 1])?;
