@@ -3,22 +3,28 @@
 //! - **clustered**: 30-bit Morton codes of lights gathered around a few hotspots (long runs of
 //!   nearby and equal keys, as a scene's light clusters give).
 //!
-//! Per distribution and size: the GPU radix and bitonic sorts (`host::render::sort`,
-//! `host::render::bitonic`), timed with GPU timestamps (`iter_custom`: the keys are re-uploaded
-//! before each run, outside the timed pass); Rust's `sort_unstable_by_key` on the CPU as an
-//! anchor; and the CPU versions of the kernels — the same functions in the lock-step emulation
-//! (`shaders::radix::pass_emulated`, `shaders::bitonic::emulated::sort_emulated`: every
-//! invocation a coroutine, switched at each shuffle, ballot and barrier), which measure the
-//! emulation, not a CPU sort.
+//! Per distribution and size: the GPU radix sort (`host::render::sort`, the device's variant;
+//! where the device runs the chained scan, also its reduce-then-scan variant) and the bitonic
+//! sort (`host::render::bitonic`), timed with GPU timestamps (`iter_custom`: the keys are
+//! re-uploaded before each run, outside the timed pass); Rust's `sort_unstable_by_key` on the
+//! CPU as an anchor; and the CPU versions of the kernels — the same functions in the lock-step
+//! emulation (`shaders::radix::emulated`, `shaders::bitonic::emulated`: every invocation a
+//! coroutine, switched at each shuffle, ballot and barrier), which measure the emulation, not a
+//! CPU sort. Criterion reports each as keys/s (`thrpt`).
+//!
+//! Then a summary table of every GPU sort on uniform keys: median GPU ms of 11 runs, keys/s and
+//! median wall-clock ms per size, and beside the radix rows CUB's key–value sort (CuPy
+//! `argsort` + gather, `benches/cub_sort.py`) where the device is an NVIDIA GPU with CuPy, with
+//! the ratio to CUB.
 //!
 //! `cargo bench -p host --bench sort`. Environment: `MANYLIGHTS_DEVICE`; GPU sizes
-//! `MANYLIGHTS_SORT_SIZES` (default 1k,10k,100k,1M,16M); emulated sizes
-//! `MANYLIGHTS_SORT_CPU_SIZES` (default 1k,10k,100k,1M; a few µs per key) at
-//! subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default 8). lavapipe's timestamps do not bracket
-//! its work: quote GPU numbers from a real GPU only.
+//! `MANYLIGHTS_SORT_SIZES` (default 1k,64k,1M,4M,16M; sizes whose buffers exceed the device's
+//! `maxStorageBufferRange` are skipped with a note); emulated sizes `MANYLIGHTS_SORT_CPU_SIZES`
+//! (default 1k,64k,1M; a few µs per key) at subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default
+//! 8). lavapipe's timestamps do not bracket its work: quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use host::gpu::Gpu;
-use host::render::sort::{LightSorter, SortKind};
+use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind};
 use host::vk::{Buffer, ContextOptions, Profiler};
 use shaders::morton::{MortonQuantizer, MORTON30_BITS};
 use std::time::Duration;
@@ -64,14 +70,60 @@ fn clustered(n: usize) -> Vec<u32> {
 type Distribution = (&'static str, fn(usize) -> Vec<u32>);
 const DISTRIBUTIONS: [Distribution; 2] = [("uniform", uniform), ("clustered", clustered)];
 
+const GPU_SIZES: [usize; 5] = [1_000, 64_000, 1_000_000, 4_000_000, 16_000_000];
+
+fn open_gpu() -> Gpu {
+    Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device")
+}
+
+/// The GPU sizes that fit one storage-buffer binding of the device.
+fn gpu_sizes(gpu: &Gpu) -> Vec<usize> {
+    let max = gpu.ctx.info.max_storage_buffer_range as usize;
+    env_sizes("MANYLIGHTS_SORT_SIZES", &GPU_SIZES)
+        .into_iter()
+        .filter(|&n| {
+            let fits = 4 * n <= max;
+            if !fits {
+                eprintln!("{n} pairs: {} B per buffer exceed this device's {max} B per binding, skipped", 4 * n);
+            }
+            fits
+        })
+        .collect()
+}
+
+/// The sorts timed on the GPU: the device's radix variant, the other radix variant where the
+/// device can run both, and the bitonic sort.
+fn gpu_sorters(gpu: &Gpu, n: u32) -> Vec<(String, LightSorter)> {
+    let radix = RadixSort::new(gpu, n).expect("radix sort buffers");
+    let name = |c: CrossTile| format!("gpu radix {} (timestamps)", if c == CrossTile::Chained { "chained" } else { "reduce-then-scan" });
+    let mut v = vec![(name(radix.cross_tile()), LightSorter::Radix(Box::new(radix)))];
+    if gpu.ctx.info.workgroups_progress() {
+        let other = RadixSort::with_cross_tile(gpu, n, CrossTile::ReduceThenScan).expect("radix sort buffers");
+        v.push((name(CrossTile::ReduceThenScan), LightSorter::Radix(Box::new(other))));
+    }
+    v.push(("gpu bitonic (timestamps)".into(), LightSorter::new(gpu, SortKind::Bitonic, n).expect("bitonic sort buffers")));
+    v
+}
+
+/// GPU milliseconds (timestamps) and wall-clock milliseconds (recording, submission and wait) of
+/// one sort of `k`, re-uploaded first, outside both.
+fn time_once(gpu: &Gpu, sorter: &LightSorter, kb: &mut Buffer, vb: &mut Buffer, k: &[u32], values: &[u32]) -> (f64, f64) {
+    kb.write(k).expect("re-upload keys");
+    vb.write(values).expect("re-upload values");
+    let mut prof = Profiler::new(&gpu.ctx, 1).expect("profiler");
+    let wall = std::time::Instant::now();
+    gpu.run(Some(&mut prof), |rec| rec.pass("sort", |rec| sorter.record(gpu, rec, kb, vb, k.len() as u32, 30))).expect("sort");
+    let wall_ms = wall.elapsed().as_secs_f64() * 1e3;
+    (prof.results().expect("timestamps").first().map_or(0.0, |t| t.ms), wall_ms)
+}
+
 fn gpu_sort(c: &mut Criterion) {
-    let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() })
-        .expect("a Vulkan device");
+    let gpu = open_gpu();
     eprintln!("device: {}", gpu.ctx.info.line());
     for (dist, make) in DISTRIBUTIONS {
         let mut g = c.benchmark_group(format!("key-value sort/{dist}"));
         g.sample_size(10);
-        for n in env_sizes("MANYLIGHTS_SORT_SIZES", &[1_000, 10_000, 100_000, 1_000_000, 16_000_000]) {
+        for n in gpu_sizes(&gpu) {
             let k = make(n);
             let values: Vec<u32> = (0..n as u32).collect();
             g.throughput(Throughput::Elements(n as u64));
@@ -84,26 +136,78 @@ fn gpu_sort(c: &mut Criterion) {
             });
             let mut kb = Buffer::from_slice(&gpu.ctx, "bench keys", &k).expect("keys");
             let mut vb = Buffer::from_slice(&gpu.ctx, "bench values", &values).expect("values");
-            for (name, kind) in [("gpu radix (timestamps)", SortKind::Radix), ("gpu bitonic (timestamps)", SortKind::Bitonic)] {
-                let sorter = LightSorter::new(&gpu, kind, n as u32).expect("sort buffers");
+            for (name, sorter) in gpu_sorters(&gpu, n as u32) {
                 g.bench_function(BenchmarkId::new(name, n), |b| {
-                    b.iter_custom(|iters| {
-                        let mut total = Duration::ZERO;
-                        for _ in 0..iters {
-                            kb.write(&k).expect("re-upload keys");
-                            vb.write(&values).expect("re-upload values");
-                            let mut prof = Profiler::new(&gpu.ctx, 1).expect("profiler");
-                            gpu.run(Some(&mut prof), |rec| rec.pass("sort", |rec| sorter.record(&gpu, rec, &kb, &vb, n as u32, 30)))
-                                .expect("sort");
-                            let ms = prof.results().expect("timestamps").first().map_or(0.0, |t| t.ms);
-                            total += Duration::from_secs_f64(ms * 1e-3);
-                        }
-                        total
-                    })
+                    b.iter_custom(|iters| (0..iters).map(|_| Duration::from_secs_f64(time_once(&gpu, &sorter, &mut kb, &mut vb, &k, &values).0 * 1e-3)).sum())
                 });
             }
         }
         g.finish();
+    }
+}
+
+/// CUB's key–value milliseconds per size from `benches/cub_sort.py` (NVIDIA with CuPy only).
+fn cub_ms(gpu: &Gpu, sizes: &[usize]) -> Option<Vec<(usize, f64)>> {
+    const NVIDIA: u32 = 0x10de;
+    if gpu.ctx.info.vendor_id != NVIDIA {
+        return None;
+    }
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../benches/cub_sort.py");
+    let out = match std::process::Command::new("python3").arg(script).args(sizes.iter().map(|n| n.to_string())).output() {
+        Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout).into_owned(),
+        Ok(o) => {
+            eprintln!("CUB reference unavailable: {script} failed: {}", String::from_utf8_lossy(&o.stderr).trim());
+            return None;
+        }
+        Err(e) => {
+            eprintln!("CUB reference unavailable: cannot run python3: {e}");
+            return None;
+        }
+    };
+    // "cupy 14.2.0 n=1000000: sort (keys) 0.090 ms, argsort+gather (key-value) 0.138 ms"
+    let parse = |line: &str| -> Option<(usize, f64)> {
+        let n = line.split("n=").nth(1)?.split(':').next()?.parse().ok()?;
+        let ms = line.split("(key-value) ").nth(1)?.trim_end_matches(" ms").trim().parse().ok()?;
+        Some((n, ms))
+    };
+    Some(out.lines().filter_map(parse).collect())
+}
+
+/// Median of `xs`.
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
+}
+
+/// The summary (see the module doc), printed after the criterion groups: every GPU sort on
+/// uniform keys, GPU and wall-clock medians of 11 runs, CUB beside the radix rows.
+fn radix_summary(_: &mut Criterion) {
+    let gpu = open_gpu();
+    let sizes = gpu_sizes(&gpu);
+    let cub = cub_ms(&gpu, &sizes);
+    println!("\nGPU sorts, uniform 30-bit keys, {}:", gpu.ctx.info.line());
+    if gpu.ctx.info.is_llvmpipe() {
+        println!("(lavapipe: its timestamps do not bracket its work, so GPU ms and keys/s are not GPU times; wall ms compare the sorts roughly)");
+    }
+    println!("| pairs | sort | GPU ms | G keys/s | wall ms | CUB ms | / CUB |");
+    println!("|---|---|---|---|---|---|---|");
+    for n in sizes {
+        let k = uniform(n);
+        let values: Vec<u32> = (0..n as u32).collect();
+        let mut kb = Buffer::from_slice(&gpu.ctx, "bench keys", &k).expect("keys");
+        let mut vb = Buffer::from_slice(&gpu.ctx, "bench values", &values).expect("values");
+        let cub_n = cub.as_ref().and_then(|c| c.iter().find(|e| e.0 == n).map(|e| e.1));
+        for (name, sorter) in gpu_sorters(&gpu, n as u32) {
+            let runs: Vec<(f64, f64)> = (0..11).map(|_| time_once(&gpu, &sorter, &mut kb, &mut vb, &k, &values)).collect();
+            let gpu_ms = median(runs.iter().map(|r| r.0).collect());
+            let wall_ms = median(runs.iter().map(|r| r.1).collect());
+            let (cub_col, ratio) = match cub_n {
+                Some(c) if matches!(sorter, LightSorter::Radix(_)) => (format!("{c:.3}"), format!("{:.2}×", gpu_ms / c)),
+                _ => ("—".into(), "—".into()),
+            };
+            let name = name.trim_start_matches("gpu ").trim_end_matches(" (timestamps)");
+            println!("| {n} | {name} | {gpu_ms:.3} | {:.2} | {wall_ms:.2} | {cub_col} | {ratio} |", n as f64 / gpu_ms * 1e-6);
+        }
     }
 }
 
@@ -112,18 +216,12 @@ fn emulated_sort(c: &mut Criterion) {
     for (dist, make) in DISTRIBUTIONS {
         let mut g = c.benchmark_group(format!("key-value sort (CPU emulation, width {width})/{dist}"));
         g.sample_size(10).warm_up_time(Duration::from_millis(100)).measurement_time(Duration::from_secs(1));
-        for n in env_sizes("MANYLIGHTS_SORT_CPU_SIZES", &[1_000, 10_000, 100_000, 1_000_000]) {
+        for n in env_sizes("MANYLIGHTS_SORT_CPU_SIZES", &[1_000, 64_000, 1_000_000]) {
             let k = make(n);
             let values: Vec<u32> = (0..n as u32).collect();
             g.throughput(Throughput::Elements(n as u64));
             g.bench_with_input(BenchmarkId::new("emulated radix", n), &k, |b, k| {
-                b.iter(|| {
-                    let (mut k, mut v) = (k.clone(), values.clone());
-                    for p in 0..shaders::radix::passes(30) {
-                        (k, v) = shaders::radix::pass_emulated(width, &k, &v, p * shaders::radix::RADIX_BITS);
-                    }
-                    (k, v)
-                })
+                b.iter(|| shaders::radix::emulated::sort_emulated_with(width, k, &values, 30, shaders::radix::emulated::Path::Auto))
             });
             g.bench_with_input(BenchmarkId::new("emulated bitonic", n), &k, |b, k| {
                 b.iter(|| shaders::bitonic::emulated::sort_emulated(width, width, k, &values))
@@ -133,5 +231,5 @@ fn emulated_sort(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, gpu_sort, emulated_sort);
+criterion_group!(benches, gpu_sort, emulated_sort, radix_summary);
 criterion_main!(benches);

@@ -3,23 +3,31 @@
 //! - bitonic (not stable): the keys equal `sort` of the input keys and the (key, value) multiset
 //!   is unchanged.
 //!
-//! Lengths 0–3, 127–129, every length from one radix tile to two tiles + 1 (256..=513), for the
-//! bitonic sort also every length from one block (4·W) to two blocks + 1 and from one piece
-//! (`g·k`, the largest pair merged without splitters) to two pieces + 1, and 2^20 (+17); on
-//! all-equal, sorted, reverse, few-distinct and random keys.
+//! Lengths 0–3, 127–129; for the radix sort 255–257, 2047 and every length from one tile to two
+//! tiles + 1 (2048..=4097: the edge of the single-workgroup path and every partial last tile);
+//! for the bitonic sort every length from one block (4·W) to two blocks + 1 and from one piece
+//! (`g·k`, the largest pair merged without splitters) to two pieces + 1; and 2^20 (+17); on
+//! all-equal, sorted, reverse, few-distinct and random keys. The radix sort also runs at every
+//! key width's pass count (odd counts end with a copy) and refuses bad input with an error.
 mod common;
 use host::gpu::Gpu;
 use host::render::sort::{LightSorter, SortKind};
 use host::vk::Buffer;
 use shaders::bitonic::{block_elems, sample_stride, SPLITTER_KEEP};
+use shaders::radix::RADIX_TILE;
 use shaders::sort_inputs::shapes as inputs;
 
 fn check(gpu: &Gpu, sorter: &LightSorter, keys: &[u32], what: &str) {
+    check_bits(gpu, sorter, keys, 32, what);
+}
+
+/// Sorts `keys` (below `2^key_bits`), values = their indices, and compares with the CPU.
+fn check_bits(gpu: &Gpu, sorter: &LightSorter, keys: &[u32], key_bits: u32, what: &str) {
     let n = keys.len();
     let values: Vec<u32> = (0..n as u32).collect();
     let mut kb = Buffer::from_slice(&gpu.ctx, "keys", keys).unwrap();
     let mut vb = Buffer::from_slice(&gpu.ctx, "values", &values).unwrap();
-    gpu.run(None, |rec| sorter.record(gpu, rec, &kb, &vb, n as u32, 32)).unwrap();
+    gpu.run(None, |rec| sorter.record(gpu, rec, &kb, &vb, n as u32, key_bits)).unwrap();
     let (k, v): (Vec<u32>, Vec<u32>) = (kb.read(n).unwrap(), vb.read(n).unwrap());
     let mut expected: Vec<(u32, u32)> = keys.iter().copied().zip(values).collect();
     let mut got: Vec<(u32, u32)> = k.into_iter().zip(v).collect();
@@ -47,7 +55,11 @@ fn check(gpu: &Gpu, sorter: &LightSorter, keys: &[u32], what: &str) {
 
 fn lengths(gpu: &Gpu, kind: SortKind) -> Vec<usize> {
     let mut lengths: Vec<usize> = vec![0, 1, 2, 3, 127, 128, 129];
-    lengths.extend(256..=513); // every size from one radix tile to two tiles + 1
+    if kind == SortKind::Radix {
+        let tile = RADIX_TILE as usize;
+        lengths.extend([255, 256, 257, tile - 1]);
+        lengths.extend(tile..=2 * tile + 1); // every size from one tile to two tiles + 1
+    }
     if kind == SortKind::Bitonic {
         let w = gpu.ctx.info.min_subgroup_size;
         let (block, piece) = (block_elems(w) as usize, (SPLITTER_KEEP * sample_stride(w)) as usize);
@@ -68,8 +80,9 @@ fn small_and_partial_lengths(kind: SortKind) {
     let sorter = LightSorter::new(&gpu, kind, capacity).unwrap();
     for n in lengths {
         for (what, keys) in inputs(n, n as u32 + 1) {
-            if n > 3 && n < 256 && !(127..=129).contains(&n) && what != "random" {
-                continue; // the shapes matter for the boundary lengths, not every small one
+            let edge = [0..=3, 127..=129, 255..=257, 2047..=2049, 4095..=4097].iter().any(|r| r.contains(&n));
+            if !edge && what != "random" {
+                continue; // every shape at the edges, random keys at every length
             }
             check(&gpu, &sorter, &keys, what);
         }
@@ -96,6 +109,38 @@ fn radix_small_and_partial_tile_lengths() {
 #[test]
 fn radix_a_million_keys() {
     a_million(SortKind::Radix);
+}
+
+/// Every pass count (odd ones end with a copy into the caller's buffers), keys masked to the
+/// width, on both radix paths.
+#[test]
+fn radix_every_key_width() {
+    let gpu = common::gpu();
+    let n = 3 * RADIX_TILE as usize + 5;
+    let sorter = LightSorter::new(&gpu, SortKind::Radix, n as u32).unwrap();
+    for key_bits in [1, 8, 12, 16, 24, 30, 32] {
+        let mask = if key_bits == 32 { u32::MAX } else { (1u32 << key_bits) - 1 };
+        for (what, keys) in inputs(n, key_bits) {
+            let keys: Vec<u32> = keys.iter().map(|k| k & mask).collect();
+            check_bits(&gpu, &sorter, &keys, key_bits, what);
+            check_bits(&gpu, &sorter, &keys[..RADIX_TILE as usize - 1], key_bits, what);
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// More pairs than the buffers were made for, or keys wider than 32 bits: an error, no dispatch.
+#[test]
+fn radix_refuses_bad_input() {
+    let gpu = common::gpu();
+    let sorter = LightSorter::new(&gpu, SortKind::Radix, 100).unwrap();
+    let kb = Buffer::from_slice(&gpu.ctx, "keys", &[0u32; 200]).unwrap();
+    let vb = Buffer::from_slice(&gpu.ctx, "values", &[0u32; 200]).unwrap();
+    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 101, 30)).unwrap_err().to_string();
+    assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
+    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 50, 33)).unwrap_err().to_string();
+    assert!(err.contains("keys of 33 bits"), "{err}");
+    common::assert_clean(&gpu);
 }
 
 #[test]

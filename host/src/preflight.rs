@@ -128,6 +128,7 @@ mod tests {
             driver_name: driver.into(),
             driver_info: String::new(),
             api_version: "1.3".into(),
+            vendor_id: 0x10de,
             subgroup_size: 32,
             min_subgroup_size: 32,
             max_subgroup_size: 32,

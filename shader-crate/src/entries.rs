@@ -4,6 +4,7 @@
 //! mismatch fails them).
 use crate::coop::gpu::GpuCoop;
 use crate::layout::*;
+use crate::light_lists::AtomicAdd;
 use crate::shading::linear_index;
 use crate::{bitonic, debug_view, octahedral, radix, scan};
 use spirv_std::glam::UVec3;
@@ -175,7 +176,8 @@ pub fn debug_view(
     pixels[(gid.y * p.grid.width + gid.x) as usize] = debug_view::shade_pixel(p, slice_bounds, gid.x, gid.y);
 }
 
-/// Radix sort step 1 ([`crate::radix`]): per tile, the count of each digit (digit-major).
+/// Radix sort step 1 ([`crate::radix`]): every pass's digit counts of [`radix::HISTOGRAM_KEYS`]
+/// keys, added into `hist[pass · 256 + digit]` (zeroed by the host).
 #[spirv(compute(threads(256)))]
 #[allow(clippy::too_many_arguments)]
 pub fn radix_histogram(
@@ -192,19 +194,79 @@ pub fn radix_histogram(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] hist: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let g = wg.y * nwg.x + wg.x;
-    let i = g * radix::RADIX_TILE + local_index;
-    let d = if i < p.count { radix::digit(keys[i as usize], p.shift) } else { radix::NO_DIGIT };
-    let n = radix::tile_histogram(&c, shared, d);
-    if g < p.groups {
-        hist[(local_index * p.groups + g) as usize] = n;
+    let base = (wg.y * nwg.x + wg.x) * radix::HISTOGRAM_KEYS;
+    if base >= p.count {
+        return;
+    }
+    let len = (p.count - base).min(radix::HISTOGRAM_KEYS);
+    let counts = radix::global_histogram(&c, shared, len, p.key_bits, |i| keys[(base + i) as usize]);
+    let mut pass = 0;
+    while pass < radix::passes(p.key_bits) {
+        let n = counts[pass as usize];
+        if n != 0 {
+            hist[(pass * radix::RADIX + local_index) as usize].fetch_add(n);
+        }
+        pass += 1;
     }
 }
 
-/// Radix sort step 3: stable scatter to (digit, tile) start + rank within the tile.
+/// Radix sort step 2.1: tile `t`'s count of digit `d` → `counts[d · tiles + t]`.
 #[spirv(compute(threads(256)))]
 #[allow(clippy::too_many_arguments)]
-pub fn radix_scatter(
+pub fn radix_upsweep(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; radix::UPSWEEP_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counts: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let t = wg.y * nwg.x + wg.x;
+    if t >= p.tiles {
+        return;
+    }
+    let base = t * radix::RADIX_TILE;
+    let len = (p.count - base).min(radix::RADIX_TILE);
+    let (shift, bits) = radix::pass_digit(p.pass, p.key_bits);
+    let n = radix::upsweep_tile(&c, shared, len, shift, bits, |i| keys[(base + i) as usize]);
+    counts[(local_index * p.tiles + t) as usize] = n;
+}
+
+/// Radix sort step 2.2: workgroup `g` turns the tile counts of digits
+/// `g · spine_digits ..` into global starts.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_spine(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; scan::SCAN_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] hist: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] starts: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let bins = p.pass * radix::RADIX;
+    radix::spine(&c, shared, wg.x * p.spine_digits, p.spine_digits, p.tiles, |e| hist[(bins + e) as usize], |i| counts[i as usize], |i, start| {
+        starts[i as usize] = start;
+    });
+}
+
+/// Radix sort step 2.3: ranks tile `t`, reorders it in workgroup memory and writes each key and
+/// value at its digit's start for the tile plus its rank.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_downsweep(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local_index: u32,
@@ -221,17 +283,80 @@ pub fn radix_scatter(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] values_out: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let g = wg.y * nwg.x + wg.x;
-    let i = g * radix::RADIX_TILE + local_index;
-    let valid = i < p.count;
-    let key = if valid { keys[i as usize] } else { 0 };
-    let d = if valid { radix::digit(key, p.shift) } else { radix::NO_DIGIT };
-    let rank = radix::tile_rank(&c, shared, d);
-    if valid {
-        let dst = (starts[(d * p.groups + g) as usize] + rank) as usize;
-        keys_out[dst] = key;
-        values_out[dst] = values[i as usize];
+    let t = wg.y * nwg.x + wg.x;
+    if t >= p.tiles {
+        return;
     }
+    let base = t * radix::RADIX_TILE;
+    let len = (p.count - base).min(radix::RADIX_TILE);
+    let start = starts[(local_index * p.tiles + t) as usize];
+    let digit = radix::pass_digit(p.pass, p.key_bits);
+    radix::downsweep_tile(&c, shared, len, start, digit, |i| keys[(base + i) as usize], |i| values[(base + i) as usize], |dst, k, v| {
+        keys_out[dst as usize] = k;
+        values_out[dst as usize] = v;
+    });
+}
+
+/// Radix sort, chained variant ([`radix::chained`]): one dispatch per pass claims tiles,
+/// ranks them, looks back through `status` and writes as [`radix_downsweep`] does.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_chained(
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; radix::RADIX_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] hist: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] status: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] keys_out: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] values_out: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let bins = p.pass * radix::RADIX;
+    radix::chained::chained_tile(
+        &c,
+        shared,
+        status,
+        p.count,
+        p.tiles,
+        (p.pass, p.key_bits),
+        |d| hist[(bins + d) as usize],
+        |i| keys[i as usize],
+        |i| values[i as usize],
+        |dst, k, v| {
+            keys_out[dst as usize] = k;
+            values_out[dst as usize] = v;
+        },
+    );
+}
+
+/// Radix sort of at most one tile (step 3): one workgroup sorts `keys[..count]` and its values
+/// in place, every pass in workgroup memory.
+#[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
+pub fn radix_sort_tile(
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &RadixParams,
+    #[spirv(workgroup)] shared: &mut [u32; radix::RADIX_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let slots = radix::Slots::of(&c);
+    let k = radix::load_items(slots, p.count, u32::MAX, |i| keys[i as usize]);
+    let v = radix::load_items(slots, p.count, 0, |i| values[i as usize]);
+    let (k, v) = radix::sort_tile(&c, shared, slots, k, v, p.key_bits);
+    radix::store_items(slots, p.count, &k, |i, x| keys[i as usize] = x);
+    radix::store_items(slots, p.count, &v, |i, x| values[i as usize] = x);
 }
 
 /// Bitonic sort step 1 ([`crate::bitonic`]): subgroup `s` (global) sorts elements

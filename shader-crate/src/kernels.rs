@@ -80,9 +80,16 @@ pub const INDIRECT_ARGS: Kernel<IndirectParams> = Kernel::new("entries::indirect
 /// The grand total of a scan over a GPU-counted prefix (`render::scan`, `entries.rs`).
 pub const SCAN_COUNTED_TOTAL: Kernel<CountedTotalParams> = Kernel::new("entries::scan_counted_total", 3, [1, 1, 1], false);
 
-// Radix sort (`entries.rs`, `radix.rs`): cooperative (workgroup barriers).
-pub const RADIX_HISTOGRAM: Kernel<RadixParams> = Kernel::new("entries::radix_histogram", 2, [256, 1, 1], true);
-pub const RADIX_SCATTER: Kernel<RadixParams> = Kernel::new("entries::radix_scatter", 5, [256, 1, 1], true);
+// Radix sort (`entries.rs`, `radix.rs`): cooperative (barriers, ballots).
+const fn radix<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
+    Kernel::new(entry, storage_buffers, [crate::radix::SORT_WORKGROUP, 1, 1], true)
+}
+pub const RADIX_HISTOGRAM: Kernel<RadixParams> = radix("entries::radix_histogram", 2);
+pub const RADIX_UPSWEEP: Kernel<RadixParams> = radix("entries::radix_upsweep", 2);
+pub const RADIX_SPINE: Kernel<RadixParams> = radix("entries::radix_spine", 3);
+pub const RADIX_DOWNSWEEP: Kernel<RadixParams> = radix("entries::radix_downsweep", 5);
+pub const RADIX_SORT_TILE: Kernel<RadixParams> = radix("entries::radix_sort_tile", 2);
+pub const RADIX_CHAINED: Kernel<RadixParams> = radix("entries::radix_chained", 6);
 
 // Clustered-BVH technique (`clustered_bvh.rs`).
 pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
@@ -141,7 +148,11 @@ pub const ALL: &[Kernel<()>] = &[
     INDIRECT_ARGS.erased(),
     SCAN_COUNTED_TOTAL.erased(),
     RADIX_HISTOGRAM.erased(),
-    RADIX_SCATTER.erased(),
+    RADIX_UPSWEEP.erased(),
+    RADIX_SPINE.erased(),
+    RADIX_DOWNSWEEP.erased(),
+    RADIX_SORT_TILE.erased(),
+    RADIX_CHAINED.erased(),
     LIGHT_KEYS.erased(),
     BVH_LEAVES.erased(),
     BVH_LEVEL.erased(),

@@ -338,19 +338,25 @@ pub struct CountedTotalParams {
 }
 const _: () = assert!(core::mem::size_of::<CountedTotalParams>() == 16);
 
-/// `radix_histogram` / `radix_scatter` kernels.
+/// Radix sort kernels (`radix_histogram`, `radix_upsweep`, `radix_spine`, `radix_downsweep`,
+/// `radix_sort_tile`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
 pub struct RadixParams {
+    /// Pairs to sort.
     pub count: u32,
-    /// First bit of this pass's digit.
-    pub shift: u32,
-    /// Tiles: `⌈count / RADIX_TILE⌉` (the digit-major histogram's row length).
-    pub groups: u32,
-    pub _pad: u32,
+    /// Keys are below `2^key_bits` (`radix::passes`, `radix::pass_digit`).
+    pub key_bits: u32,
+    /// The pass being recorded (its digit and its row of the global histogram).
+    pub pass: u32,
+    /// Tiles: `⌈count / RADIX_TILE⌉` (the row length of the tile counts).
+    pub tiles: u32,
+    /// Digits per spine workgroup (`radix::spine_digits`).
+    pub spine_digits: u32,
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(core::mem::size_of::<RadixParams>() == 16);
+const _: () = assert!(core::mem::size_of::<RadixParams>() == 32);
 
 /// Light-BVH kernels: `count` lights; the level being built and its node count.
 #[repr(C)]

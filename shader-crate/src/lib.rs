@@ -12,7 +12,8 @@
 //! * [`morton`] — 30/63-bit 3D Morton codes.
 //! * [`coop`] — the cooperative-kernel traits (GPU intrinsics / CPU lock-step emulation).
 //! * [`scan`] — subgroup/workgroup prefix sums.
-//! * [`radix`] — LSD radix sort (key–value) tile steps.
+//! * [`radix`] — LSD radix sort (key–value): histogram, upsweep, spine, ballot-ranked downsweep,
+//!   single-tile sort, and the chained-scan variant ([`radix::chained`]).
 //! * [`bitonic`] — bitonic-warp merge sort (key–value): block sort, splitters, warp merge.
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).

@@ -45,13 +45,26 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
     shared: &mut S,
     value: u32,
 ) -> (u32, u32) {
+    workgroup_exclusive_scan_at(c, shared, 0, value)
+}
+
+/// [`workgroup_exclusive_scan`] using workgroup-memory words `at..at + SCAN_SHARED_WORDS`. A
+/// caller scanning twice in a row puts a workgroup barrier between the calls (the second call's
+/// first stores would race with the first call's last loads).
+#[inline]
+pub fn workgroup_exclusive_scan_at<C: Coop, S: SharedU32 + ?Sized>(
+    c: &C,
+    shared: &mut S,
+    at: u32,
+    value: u32,
+) -> (u32, u32) {
     let width = c.subgroup_size();
     let sg = c.subgroup_id();
     let groups = c.num_subgroups();
     // 1–2.
     let inclusive = subgroup_inclusive_scan(c, value);
     if c.lane() == width - 1 {
-        shared.store(sg, inclusive);
+        shared.store(at + sg, inclusive);
     }
     c.workgroup_barrier();
     // 3. Subgroup 0 scans the subgroup totals, W at a time.
@@ -60,10 +73,10 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
         let mut base = 0;
         while base < groups {
             let i = base + c.lane();
-            let v = if i < groups { shared.load(i) } else { 0 };
+            let v = if i < groups { shared.load(at + i) } else { 0 };
             let s = subgroup_inclusive_scan(c, v).wrapping_add(carry);
             if i < groups {
-                shared.store(i, s);
+                shared.store(at + i, s);
             }
             carry = c.shuffle(s, width - 1);
             base += width;
@@ -71,35 +84,9 @@ pub fn workgroup_exclusive_scan<C: Coop, S: SharedU32 + ?Sized>(
     }
     c.workgroup_barrier();
     // 4.
-    let before = if sg > 0 { shared.load(sg - 1) } else { 0 };
-    let total = shared.load(groups - 1);
+    let before = if sg > 0 { shared.load(at + sg - 1) } else { 0 };
+    let total = shared.load(at + groups - 1);
     (before.wrapping_add(inclusive).wrapping_sub(value), total)
-}
-
-/// The host's device-wide exclusive scan (`host/src/render/scan.rs`) on the CPU at subgroup width
-/// `width`: level 0 scans workgroups of [`SCAN_WORKGROUP`] with [`workgroup_exclusive_scan`] in
-/// the lock-step emulation, the workgroup totals are scanned the same way (recursively) and
-/// added back. Returns the exclusive prefixes and the grand total.
-#[cfg(not(target_arch = "spirv"))]
-pub fn exclusive_scan_emulated(width: u32, input: &[u32]) -> (Vec<u32>, u32) {
-    use crate::coop::cpu::{run_workgroups, Emulation};
-    let n = input.len();
-    let groups = n.max(1).div_ceil(SCAN_WORKGROUP as usize);
-    let emu = Emulation { width, workgroup_size: SCAN_WORKGROUP, shared_words: SCAN_SHARED_WORDS };
-    let out = run_workgroups(emu, groups as u32, |g, c, s| {
-        let i = (g * SCAN_WORKGROUP + c.local_index()) as usize;
-        workgroup_exclusive_scan(c, s, input.get(i).copied().unwrap_or(0))
-    });
-    let mut prefix: Vec<u32> = out[..n].iter().map(|p| p.0).collect();
-    let totals: Vec<u32> = out.iter().step_by(SCAN_WORKGROUP as usize).map(|p| p.1).collect();
-    if groups == 1 {
-        return (prefix, totals[0]);
-    }
-    let (offsets, total) = exclusive_scan_emulated(width, &totals);
-    for (i, p) in prefix.iter_mut().enumerate() {
-        *p = p.wrapping_add(offsets[i / SCAN_WORKGROUP as usize]);
-    }
-    (prefix, total)
 }
 
 #[cfg(test)]
@@ -152,24 +139,5 @@ mod tests {
             }
             c.shuffle(1, 0)
         });
-    }
-
-    /// The device-wide scan at every width, across one, two and three levels, partial groups
-    /// included.
-    #[test]
-    fn emulated_device_scan_equals_sequential() {
-        let mut x = 0x9e37_79b9u32;
-        for width in [4, 8, 16, 32, 64] {
-            for n in [0usize, 1, 255, 256, 257, 256 * 256, 256 * 256 + 3, 70_001] {
-                let input: Vec<u32> = (0..n).map(|_| { x ^= x << 13; x ^= x >> 17; x ^= x << 5; x % 1000 }).collect();
-                let (prefix, total) = exclusive_scan_emulated(width, &input);
-                let mut acc = 0u32;
-                for (i, &v) in input.iter().enumerate() {
-                    assert_eq!(prefix[i], acc, "width {width}, n {n}, element {i}");
-                    acc = acc.wrapping_add(v);
-                }
-                assert_eq!(total, acc, "width {width}, n {n}: total");
-            }
-        }
     }
 }

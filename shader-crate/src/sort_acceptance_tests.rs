@@ -2,7 +2,8 @@
 //! their GPU kernels ([`crate::coop::cpu`]) at subgroup widths 4, 8, 16, 32 and 64:
 //!
 //! * lengths 0, 1, 2, 3, 127, 128, 129, 2^20 and 2^20 + 17, and every length from one partition
-//!   to two partitions + 1 — for the radix sort its tile ([`RADIX_TILE`] keys: 256..=513), for
+//!   to two partitions + 1 — for the radix sort its tile ([`RADIX_TILE`] keys: 2048..=4097, every
+//!   partial last tile, with 255–257 and 2047–2049 the edges of its single-workgroup path), for
 //!   the bitonic sort both of its partitions: the block of the block sort (`M = 4·W`:
 //!   `M..=2M+1`) and the piece merged without splitters (`P = k·g = 16·W`: `P..=2P+1`, the
 //!   lengths whose merge levels start splitting);
@@ -14,7 +15,7 @@
 //!
 //! The same lengths and shapes run on the GPU (lavapipe, and the H100) in `tests/sort.rs`.
 use crate::bitonic::{block_elems, emulated::sort_emulated as bitonic_sort, sample_stride, SPLITTER_KEEP};
-use crate::radix::{sort_emulated as radix_sort, RADIX_TILE};
+use crate::radix::{emulated::sort_emulated as radix_sort, RADIX_TILE};
 pub use crate::sort_inputs::shapes as inputs;
 
 /// A million and seventeen: the acceptance's 2^20 + 17.
@@ -59,7 +60,12 @@ fn check(sorter: Sorter, width: u32, keys: &[u32], what: &str) -> u32 {
 fn partition_lengths(sorter: Sorter, width: u32) -> Vec<usize> {
     let mut lengths: Vec<usize> = vec![0, 1, 2, 3, 127, 128, 129];
     match sorter {
-        Sorter::Radix => lengths.extend(RADIX_TILE as usize..=2 * RADIX_TILE as usize + 1),
+        Sorter::Radix => {
+            // The single-workgroup path's boundaries (it takes up to one tile), then every
+            // length from one tile to two tiles + 1: every partial last tile of the tile path.
+            lengths.extend([255, 256, 257, RADIX_TILE as usize - 1]);
+            lengths.extend(RADIX_TILE as usize..=2 * RADIX_TILE as usize + 1);
+        }
         Sorter::Bitonic => {
             let block = block_elems(width) as usize;
             let piece = (SPLITTER_KEEP * sample_stride(width)) as usize;

@@ -52,7 +52,7 @@ impl LightBvh {
     }
 
     pub fn bytes(&self) -> u64 {
-        self.keys.size + self.order.size + self.nodes.size
+        self.keys.size + self.order.size + self.nodes.size + self.sort.bytes()
     }
 
     /// Records the Morton keys ("morton keys"), their sort ("light sort") and the level-by-level

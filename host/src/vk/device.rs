@@ -17,6 +17,8 @@ pub struct DeviceInfo {
     pub driver_name: String,
     pub driver_info: String,
     pub api_version: String,
+    /// PCI vendor id (`VkPhysicalDeviceProperties::vendorID`).
+    pub vendor_id: u32,
     /// The subgroup width compute kernels run with (never hard-coded: read here).
     pub subgroup_size: u32,
     pub min_subgroup_size: u32,
@@ -52,6 +54,17 @@ impl DeviceInfo {
     /// 65 535 iterations: techniques cap the lights one invocation visits there.
     pub fn is_llvmpipe(&self) -> bool {
         self.driver_name.to_lowercase().contains("llvmpipe")
+    }
+
+    /// Whether workgroups that wait on one another (a chained scan's look-back) finish here:
+    /// discrete NVIDIA and AMD GPUs keep every launched workgroup running, so a workgroup that
+    /// waits only on workgroups launched before it (tiles claimed in launch order) waits a
+    /// bounded time. Vulkan promises no forward progress between workgroups, so every other
+    /// device answers no — lavapipe included: its loop limiter would end a spinning look-back.
+    pub fn workgroups_progress(&self) -> bool {
+        const NVIDIA: u32 = 0x10de;
+        const AMD: u32 = 0x1002;
+        self.kind == "discrete GPU" && matches!(self.vendor_id, NVIDIA | AMD) && !self.is_llvmpipe()
     }
 
     /// One line naming the device, e.g. for the CLI's stderr and the notes.
@@ -130,6 +143,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         driver_name: cstr(&driver.driver_name),
         driver_info: cstr(&driver.driver_info),
         api_version: version(p.api_version),
+        vendor_id: p.vendor_id,
         subgroup_size: subgroup.subgroup_size,
         min_subgroup_size: v13.min_subgroup_size.max(1),
         max_subgroup_size: v13.max_subgroup_size.max(subgroup.subgroup_size),

@@ -261,6 +261,20 @@ impl Recorder<'_> {
         barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
     }
 
+    /// Copies the first `bytes` of `src` into `dst` and makes them visible to kernels and copies.
+    pub fn copy(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) -> VkResult<()> {
+        if bytes > src.size.min(dst.size) {
+            let (name, have) = if src.size < dst.size { (&src.name, src.size) } else { (&dst.name, dst.size) };
+            return Err(VkError::BufferTooSmall { name: name.clone(), have, need: bytes });
+        }
+        if bytes > 0 {
+            let region = vk::BufferCopy::default().size(bytes);
+            unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]) };
+            barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+        }
+        Ok(())
+    }
+
     /// Notes (for the profiler) that the pass being recorded does raster work.
     pub(crate) fn mark_raster(&mut self) {
         if let Some(p) = self.profiler.as_mut() {

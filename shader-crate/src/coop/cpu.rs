@@ -4,8 +4,8 @@
 //! thread schedules all invocations of a workgroup in lock-step at every collective operation:
 //!
 //! 1. Each invocation of a subgroup runs until its next collective operation and *suspends* with
-//!    a request: a shuffle (its value and source lane), a ballot (its vote) or the workgroup
-//!    barrier — or it returns.
+//!    a request: a shuffle (its value and source lane), a ballot (its vote), the subgroup barrier
+//!    or the workgroup barrier — or it returns.
 //! 2. When every lane of the subgroup waits on a subgroup operation, the scheduler checks that
 //!    they all wait on the same kind, computes every lane's answer from the posted values (a
 //!    shuffle reads the source lane's posted value, a ballot ORs the votes) and resumes each lane
@@ -46,6 +46,7 @@ const STACK_BYTES: usize = 256 * 1024;
 enum Request {
     Shuffle { value: u32, src: u32 },
     Ballot(bool),
+    SubgroupBarrier,
     Barrier,
 }
 
@@ -54,6 +55,7 @@ impl Request {
         match self {
             Request::Shuffle { .. } => "a shuffle",
             Request::Ballot(_) => "a ballot",
+            Request::SubgroupBarrier => "the subgroup barrier",
             Request::Barrier => "the workgroup barrier",
         }
     }
@@ -101,6 +103,9 @@ impl Coop for CpuCoop<'_> {
     fn workgroup_barrier(&self) {
         self.yielder.suspend(Request::Barrier);
     }
+    fn subgroup_barrier(&self) {
+        self.yielder.suspend(Request::SubgroupBarrier);
+    }
 }
 
 /// One emulated invocation's handle on workgroup memory.
@@ -114,6 +119,12 @@ impl SharedU32 for CpuShared<'_> {
     }
     fn store(&mut self, i: u32, v: u32) {
         self.words[i as usize].set(v);
+    }
+    /// The invocations of a workgroup run one at a time: a plain read-modify-write is atomic.
+    fn atomic_add(&mut self, i: u32, v: u32) -> u32 {
+        let old = self.words[i as usize].get();
+        self.words[i as usize].set(old.wrapping_add(v));
+        old
     }
 }
 
@@ -185,6 +196,60 @@ where
     })
 }
 
+/// Where workgroups that wait on each other (a chained scan) learn when the emulation starts and
+/// ends each of them, so that they can tell a deadlock from a wait.
+pub trait Residency: Sync {
+    /// A thread starts workgroup `group`.
+    fn launch(&self, group: u32);
+    /// Workgroup `group` returned, or panicked.
+    fn retire(&self, group: u32, panicked: bool);
+}
+
+/// Runs the workgroups `order[0], order[1], …` on `resident` threads: a thread launches the next
+/// group of `order` when its previous one returned, as a GPU launches workgroups into free slots,
+/// so at most `resident` groups run at once, and later groups of `order` start only when earlier
+/// ones leave. Unlike [`run_workgroups`], workgroups may wait on each other (through `residency`,
+/// which hears every launch and return). Results in group order (`order` is a permutation of
+/// `0..order.len()`); a panic in any group fails the dispatch with its message.
+pub fn run_workgroups_resident<R, F>(emu: Emulation, order: &[u32], resident: u32, residency: &dyn Residency, kernel: F) -> Vec<R>
+where
+    R: Send,
+    F: Fn(u32, &CpuCoop<'_>, &mut CpuShared<'_>) -> R + Sync,
+{
+    use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let results: Vec<Mutex<Option<Vec<R>>>> = order.iter().map(|_| Mutex::new(None)).collect();
+    let first_panic = Mutex::new(None);
+    std::thread::scope(|s| {
+        for _ in 0..resident.max(1) {
+            s.spawn(|| {
+                let mut worker = Worker::new(emu);
+                loop {
+                    let at = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(&group) = order.get(at) else { break };
+                    residency.launch(group);
+                    worker.shared.iter().for_each(|w| w.set(0));
+                    let r = catch_unwind(AssertUnwindSafe(|| worker.group(group, &kernel)));
+                    residency.retire(group, r.is_err());
+                    match r {
+                        Ok(out) => *results[group as usize].lock().unwrap_or_else(|e| e.into_inner()) = Some(out),
+                        Err(p) => {
+                            first_panic.lock().unwrap_or_else(|e| e.into_inner()).get_or_insert(p);
+                            break;
+                        }
+                    }
+                }
+                worker.recycle();
+            });
+        }
+    });
+    if let Some(p) = first_panic.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        resume_unwind(p);
+    }
+    results.into_iter().flat_map(|r| r.into_inner().unwrap_or_else(|e| e.into_inner()).expect("every group ran")).collect()
+}
+
 /// One scheduler thread: the invocations' stacks and the workgroup memory, reused by every
 /// workgroup it runs.
 struct Worker {
@@ -225,10 +290,15 @@ impl Worker {
             self.shared.iter().for_each(|w| w.set(0));
             out.extend(self.group(group, kernel));
         }
+        self.recycle();
+        out
+    }
+
+    /// Hands the stacks back to [`STACK_POOL`].
+    fn recycle(mut self) {
         let mut pool = STACK_POOL.lock().unwrap_or_else(|e| e.into_inner());
         let room = POOL_CAPACITY.saturating_sub(pool.len());
         pool.extend(self.stacks.drain(..).take(room));
-        out
     }
 
     /// Runs one workgroup to completion (steps 1–3 of the module doc).
@@ -355,6 +425,7 @@ fn run_subgroup<R>(
                 }
                 state.iter_mut().for_each(|st| *st = State::Ready(mask));
             }
+            Some(Request::SubgroupBarrier) => state.iter_mut().for_each(|st| *st = State::Ready([0; 4])),
             Some(Request::Barrier) | None => return,
         }
     }

@@ -51,4 +51,13 @@ impl Coop for GpuCoop {
     fn workgroup_barrier(&self) {
         spirv_std::arch::workgroup_memory_barrier_with_group_sync();
     }
+    #[inline]
+    fn subgroup_barrier(&self) {
+        use spirv_std::memory::{Scope, Semantics};
+        spirv_std::arch::control_barrier::<
+            { Scope::Subgroup as u32 },
+            { Scope::Subgroup as u32 },
+            { Semantics::WORKGROUP_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() },
+        >();
+    }
 }

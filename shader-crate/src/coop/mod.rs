@@ -47,12 +47,18 @@ pub trait Coop {
     fn ballot(&self, pred: bool) -> [u32; 4];
     /// Control barrier + workgroup-memory acquire/release over the whole workgroup.
     fn workgroup_barrier(&self);
+    /// Control barrier + workgroup-memory acquire/release over the subgroup: one lane's
+    /// workgroup-memory stores before it are seen by the subgroup's other lanes after it (a
+    /// shuffle or ballot alone does not order memory).
+    fn subgroup_barrier(&self);
 }
 
 /// Workgroup memory seen as `u32` words.
 pub trait SharedU32 {
     fn load(&self, i: u32) -> u32;
     fn store(&mut self, i: u32, v: u32);
+    /// Adds `v` to word `i` atomically (workgroup scope, relaxed) and returns the old value.
+    fn atomic_add(&mut self, i: u32, v: u32) -> u32;
 }
 
 impl<const N: usize> SharedU32 for [u32; N] {
@@ -63,6 +69,23 @@ impl<const N: usize> SharedU32 for [u32; N] {
     #[inline]
     fn store(&mut self, i: u32, v: u32) {
         self[i as usize] = v;
+    }
+    /// `OpAtomicIAdd` on the GPU; a plain read-modify-write off it (one thread owns the array).
+    #[inline]
+    fn atomic_add(&mut self, i: u32, v: u32) -> u32 {
+        #[cfg(target_arch = "spirv")]
+        unsafe {
+            spirv_std::arch::atomic_i_add::<u32, { spirv_std::memory::Scope::Workgroup as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(
+                &mut self[i as usize],
+                v,
+            )
+        }
+        #[cfg(not(target_arch = "spirv"))]
+        {
+            let old = self[i as usize];
+            self[i as usize] = old.wrapping_add(v);
+            old
+        }
     }
 }
 
@@ -85,6 +108,41 @@ pub fn ballot_rank(mask: [u32; 4], lane: u32) -> u32 {
         w += 1;
     }
     n
+}
+
+/// The ballot mask of every lane of a subgroup of `width` lanes.
+#[inline]
+pub fn subgroup_lanes(width: u32) -> [u32; 4] {
+    let mut m = [0u32; 4];
+    let mut w = 0;
+    while w < 4 {
+        let lo = w * 32;
+        m[w as usize] = if width >= lo + 32 {
+            u32::MAX
+        } else if width > lo {
+            (1u32 << (width - lo)) - 1
+        } else {
+            0
+        };
+        w += 1;
+    }
+    m
+}
+
+/// The lowest lane set in a ballot (128 for an empty one).
+#[inline]
+pub fn ballot_first(mask: [u32; 4]) -> u32 {
+    if mask[0] != 0 {
+        mask[0].trailing_zeros()
+    } else if mask[1] != 0 {
+        32 + mask[1].trailing_zeros()
+    } else if mask[2] != 0 {
+        64 + mask[2].trailing_zeros()
+    } else if mask[3] != 0 {
+        96 + mask[3].trailing_zeros()
+    } else {
+        128
+    }
 }
 
 /// Total set bits of a ballot.
