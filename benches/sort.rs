@@ -191,7 +191,7 @@ fn radix_summary(_: &mut Criterion) {
     if gpu.ctx.info.is_llvmpipe() {
         println!("(lavapipe: its timestamps do not bracket its work, so GPU ms and keys/s are not GPU times; wall ms compare the sorts roughly)");
     }
-    println!("| pairs | sort | GPU ms | G keys/s | wall ms | CUB ms | / CUB |");
+    println!("| pairs | sort | GPU ms | M keys/s | wall ms | CUB ms | / CUB |");
     println!("|---|---|---|---|---|---|---|");
     for n in sizes {
         let k = uniform(n);
@@ -208,7 +208,7 @@ fn radix_summary(_: &mut Criterion) {
                 _ => ("—".into(), "—".into()),
             };
             let name = name.trim_start_matches("gpu ").trim_end_matches(" (timestamps)");
-            println!("| {n} | {name} | {gpu_ms:.3} | {:.2} | {wall_ms:.2} | {cub_col} | {ratio} |", n as f64 / gpu_ms * 1e-6);
+            println!("| {n} | {name} | {gpu_ms:.3} | {:.1} | {wall_ms:.2} | {cub_col} | {ratio} |", n as f64 / gpu_ms * 1e-3);
         }
     }
 }

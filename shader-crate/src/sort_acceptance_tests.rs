@@ -1,5 +1,7 @@
-//! The sort acceptance matrix on the CPU, for both light sorters, in the lock-step emulation of
-//! their GPU kernels ([`crate::coop::cpu`]) at subgroup widths 4, 8, 16, 32 and 64:
+//! The sort acceptance matrix on the CPU, for both light sorters — the radix sort as the host
+//! records it and with its chained-scan passes ([`crate::radix::chained`], workgroups launched
+//! in a shuffled order) — in the lock-step emulation of their GPU kernels
+//! ([`crate::coop::cpu`]) at subgroup widths 4, 8, 16, 32 and 64:
 //!
 //! * lengths 0, 1, 2, 3, 127, 128, 129, 2^20 and 2^20 + 17, and every length from one partition
 //!   to two partitions + 1 — for the radix sort its tile ([`RADIX_TILE`] keys: 2048..=4097, every
@@ -9,12 +11,13 @@
 //!   lengths whose merge levels start splitting);
 //! * every length on all five input shapes: all equal, already sorted, reverse sorted, few
 //!   distinct values (4) and random (with a real `0xFFFF_FFFF`, the bitonic pads' key);
-//! * radix is stable, so its output must equal a stable sort of the (key, value) pairs exactly;
+//! * radix (both variants) is stable, so its output must equal a stable sort of the (key, value) pairs exactly;
 //!   the bitonic sort is not, so its keys must equal `sort` of the keys and its (key, value)
 //!   multiset must be unchanged.
 //!
 //! The same lengths and shapes run on the GPU (lavapipe, and the H100) in `tests/sort.rs`.
 use crate::bitonic::{block_elems, emulated::sort_emulated as bitonic_sort, sample_stride, SPLITTER_KEEP};
+use crate::radix::chained::emulated::{sort_chained_emulated, Order, Schedule};
 use crate::radix::{emulated::sort_emulated as radix_sort, RADIX_TILE};
 pub use crate::sort_inputs::shapes as inputs;
 
@@ -23,7 +26,11 @@ const MILLION: usize = 1 << 20;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Sorter {
+    /// As the host records it: one workgroup up to one tile, reduce-then-scan passes above.
     Radix,
+    /// The chained-scan passes at every length, workgroups launched in a shuffled order on 3
+    /// resident threads.
+    RadixChained,
     Bitonic,
 }
 
@@ -38,6 +45,11 @@ fn check(sorter: Sorter, width: u32, keys: &[u32], what: &str) -> u32 {
     let (k, v, steps) = match sorter {
         Sorter::Radix => {
             let (k, v) = radix_sort(width, keys, &values);
+            (k, v, 0)
+        }
+        Sorter::RadixChained => {
+            let schedule = Schedule { resident: 3, order: Order::Shuffled(n as u32 ^ width) };
+            let (k, v) = sort_chained_emulated(width, keys, &values, 32, schedule);
             (k, v, 0)
         }
         Sorter::Bitonic => bitonic_sort(width, width, keys, &values),
@@ -60,7 +72,7 @@ fn check(sorter: Sorter, width: u32, keys: &[u32], what: &str) -> u32 {
 fn partition_lengths(sorter: Sorter, width: u32) -> Vec<usize> {
     let mut lengths: Vec<usize> = vec![0, 1, 2, 3, 127, 128, 129];
     match sorter {
-        Sorter::Radix => {
+        Sorter::Radix | Sorter::RadixChained => {
             // The single-workgroup path's boundaries (it takes up to one tile), then every
             // length from one tile to two tiles + 1: every partial last tile of the tile path.
             lengths.extend([255, 256, 257, RADIX_TILE as usize - 1]);
@@ -115,6 +127,11 @@ matrix! {
     radix_width_16: Radix, 16;
     radix_width_32: Radix, 32;
     radix_width_64: Radix, 64;
+    radix_chained_width_4: RadixChained, 4;
+    radix_chained_width_8: RadixChained, 8;
+    radix_chained_width_16: RadixChained, 16;
+    radix_chained_width_32: RadixChained, 32;
+    radix_chained_width_64: RadixChained, 64;
     bitonic_width_4: Bitonic, 4;
     bitonic_width_8: Bitonic, 8;
     bitonic_width_16: Bitonic, 16;

@@ -13,7 +13,10 @@
 //!     the status words per sort.
 //!
 //!   An odd pass count ends with a copy of the scratch pair into the caller's buffers: a copy
-//!   moves 16 B per pair where an extra identity pass would move more than 20.
+//!   moves 16 B per pair where an extra identity pass would move more than 20. On lavapipe
+//!   (1M pairs of 24-bit keys, wall clock, medians of 7, a loaded 2-core machine) three passes
+//!   and the copy took 20–45 % less time than four passes in four of five paired runs (the
+//!   first, right after start-up, 8 % more); no GPU measurement yet.
 //!
 //! Scratch memory: `8 · capacity` B (keys + values) when `capacity > RADIX_TILE`, 4 KiB of
 //! histogram, and `2 · 4 · 256 · ⌈capacity / 2048⌉` B of tile counts and starts
