@@ -38,11 +38,18 @@ pub enum CrossTile {
     Chained,
 }
 
+/// Largest sort the chained scan is chosen for. Measured on an NVIDIA H200 (`benches/sort.rs`,
+/// uniform 30-bit keys, GPU ms chained / reduce-then-scan): 64k 0.157 / 0.245, 1M 0.239 / 0.299,
+/// 4M 0.695 / 0.669, 10M 1.504 / 1.388, 16M 2.255 / 2.101 — one dispatch per pass wins while
+/// launch and spine costs dominate, the two-read reduce-then-scan from a few million pairs on.
+pub const CHAINED_UP_TO_PAIRS: u32 = 1 << 21;
+
 impl CrossTile {
-    /// Chained where the device keeps waiting workgroups progressing and the counts fit its
-    /// status words, reduce-then-scan elsewhere.
+    /// Chained where the device keeps waiting workgroups progressing and the sort is at most
+    /// [`CHAINED_UP_TO_PAIRS`] (within its status words), reduce-then-scan elsewhere.
     pub fn for_device(info: &DeviceInfo, capacity: u32) -> Self {
-        if info.workgroups_progress() && capacity <= CHAINED_MAX_PAIRS { Self::Chained } else { Self::ReduceThenScan }
+        let chained = info.workgroups_progress() && capacity <= CHAINED_UP_TO_PAIRS.min(CHAINED_MAX_PAIRS);
+        if chained { Self::Chained } else { Self::ReduceThenScan }
     }
 }
 
