@@ -8,10 +8,12 @@
 //! for the bitonic sort every length from one block (4·W) to two blocks + 1 and from one piece
 //! (`g·k`, the largest pair merged without splitters) to two pieces + 1; and 2^20 (+17); on
 //! all-equal, sorted, reverse, few-distinct and random keys. The radix sort also runs at every
-//! key width's pass count (odd counts end with a copy) and refuses bad input with an error.
+//! key width's pass count (odd counts end with a copy) and refuses bad input with an error. Where
+//! the device runs the chained scan, the radix lengths run on both cross-tile variants (the
+//! device picks by size, `render::sort::CHAINED_UP_TO_PAIRS`).
 mod common;
 use host::gpu::Gpu;
-use host::render::sort::{LightSorter, SortKind};
+use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind};
 use host::vk::Buffer;
 use shaders::bitonic::{block_elems, sample_stride, SPLITTER_KEEP};
 use shaders::radix::RADIX_TILE;
@@ -71,20 +73,33 @@ fn lengths(gpu: &Gpu, kind: SortKind) -> Vec<usize> {
     lengths
 }
 
+/// The sorters of `kind` for `capacity` pairs: the device's choice, and for the radix sort on a
+/// device that runs the chained scan also the other variant.
+fn sorters(gpu: &Gpu, kind: SortKind, capacity: u32) -> Vec<LightSorter> {
+    let mut v = vec![LightSorter::new(gpu, kind, capacity).unwrap()];
+    if kind == SortKind::Radix && gpu.ctx.info.workgroups_progress() {
+        for cross in [CrossTile::Chained, CrossTile::ReduceThenScan] {
+            v.push(LightSorter::Radix(Box::new(RadixSort::with_cross_tile(gpu, capacity, cross).unwrap())));
+        }
+    }
+    v
+}
+
 fn small_and_partial_lengths(kind: SortKind) {
     let gpu = common::gpu();
     // Plan for the longest length: the piece-boundary lengths grow with the subgroup width
     // (1024 fits lavapipe's width 8, not NVIDIA's 32).
     let lengths = lengths(&gpu, kind);
     let capacity = lengths.iter().copied().max().unwrap_or(1).max(1) as u32;
-    let sorter = LightSorter::new(&gpu, kind, capacity).unwrap();
-    for n in lengths {
-        for (what, keys) in inputs(n, n as u32 + 1) {
-            let edge = [0..=3, 127..=129, 255..=257, 2047..=2049, 4095..=4097].iter().any(|r| r.contains(&n));
-            if !edge && what != "random" {
-                continue; // every shape at the edges, random keys at every length
+    for sorter in sorters(&gpu, kind, capacity) {
+        for &n in &lengths {
+            for (what, keys) in inputs(n, n as u32 + 1) {
+                let edge = [0..=3, 127..=129, 255..=257, 2047..=2049, 4095..=4097].iter().any(|r| r.contains(&n));
+                if !edge && what != "random" {
+                    continue; // every shape at the edges, random keys at every length
+                }
+                check(&gpu, &sorter, &keys, what);
             }
-            check(&gpu, &sorter, &keys, what);
         }
     }
     common::assert_clean(&gpu);
@@ -93,10 +108,11 @@ fn small_and_partial_lengths(kind: SortKind) {
 fn a_million(kind: SortKind) {
     let gpu = common::gpu();
     let n = (1 << 20) + 17;
-    let sorter = LightSorter::new(&gpu, kind, n as u32).unwrap();
-    for (what, keys) in inputs(n, 99) {
-        check(&gpu, &sorter, &keys, what);
-        check(&gpu, &sorter, &keys[..1 << 20], what);
+    for sorter in sorters(&gpu, kind, n as u32) {
+        for (what, keys) in inputs(n, 99) {
+            check(&gpu, &sorter, &keys, what);
+            check(&gpu, &sorter, &keys[..1 << 20], what);
+        }
     }
     common::assert_clean(&gpu);
 }
