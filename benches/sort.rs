@@ -212,10 +212,9 @@ fn cub_ms(gpu: &Gpu, sizes: &[usize]) -> Option<Vec<(usize, f64)>> {
     Some(out.lines().filter_map(parse).collect())
 }
 
-/// Median of `xs`.
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs[xs.len() / 2]
+/// Median of `xs` (`render::frame_time::spread`, as the frame's medians).
+fn median(xs: Vec<f64>) -> f64 {
+    host::render::frame_time::spread(xs).expect("timed sorts").0
 }
 
 /// The summary (see the module doc), printed before the criterion groups: every GPU sort on

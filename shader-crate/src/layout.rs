@@ -323,6 +323,14 @@ pub struct IndirectParams {
 }
 const _: () = assert!(core::mem::size_of::<IndirectParams>() == 32);
 
+impl IndirectParams {
+    /// One argument triple at word `offset`: `counters[counter] · scale` items,
+    /// `items_per_group` per workgroup.
+    pub const fn one(counter: u32, scale: u32, items_per_group: u32, offset: u32) -> Self {
+        Self { counter, scale, items_per_group, growth: 1, offset, levels: 1, _pad: [0; 2] }
+    }
+}
+
 /// `scan_counted_total`: `counters[total] = output[n − 1] + input[n − 1]` for the
 /// `n = min(counters[count] · scale, capacity)` elements a counted scan scanned (0 for none).
 #[repr(C)]

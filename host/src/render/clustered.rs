@@ -10,9 +10,10 @@
 //!    (indirect dispatches from the GPU's page counter, `scan::DeviceScan::record_counted`).
 //! 4. **assignment** — per unique cluster, its lights as counts → scan → fill; offsets + counts
 //!    give each cluster's list. All three run for the frame's unique clusters (indirect
-//!    dispatches from the GPU's cluster counter), never for the buffers' capacity. `clustered-naive` tests every light against the cluster's AABB;
-//!    `clustered-bvh` walks the light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary
-//!    node boxes, on the async-compute queue, overlapping the G-buffer raster).
+//!    dispatches from the GPU's cluster counter), never for the buffers' capacity.
+//!    `clustered-naive` tests every light against the cluster's AABB; `clustered-bvh` walks the
+//!    light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node boxes, on the
+//!    async-compute queue, overlapping the G-buffer raster).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
@@ -207,7 +208,7 @@ impl ClusterBuffers {
     pub fn sizes(&self) -> Vec<(String, u64)> {
         let b = [
             &self.keys, &self.marks, &self.page_base, &self.page_of_alloc, &self.slots, &self.slot_rank, &self.unique,
-            &self.counts, &self.offsets, &self.list, &self.counters,
+            &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args,
         ];
         let mut v: Vec<(String, u64)> = b.iter().map(|b| (b.name.clone(), b.size)).collect();
         v.push(("scan scratch".into(), self.page_scan.bytes() + self.slot_scan.bytes() + self.cluster_scan.bytes()));
@@ -245,7 +246,7 @@ impl ClusterBuffers {
             let allocated = Counted { counter: COUNTER_PAGES, scale: PAGE_SIZE };
             self.slot_scan.record_counted(gpu, rec, &self.slots, &self.slot_rank, &self.counters, allocated, Some(COUNTER_UNIQUE_CLUSTERS))?;
             let compact = k.compact_clusters.kernel.invocations();
-            let a = IndirectParams { counter: COUNTER_PAGES, scale: PAGE_SIZE, items_per_group: compact, growth: 1, offset: ARGS_COMPACT, levels: 1, _pad: [0; 2] };
+            let a = IndirectParams::one(COUNTER_PAGES, PAGE_SIZE, compact, ARGS_COMPACT);
             rec.indirect_args(&k.indirect_args, &self.counters, &self.dispatch_args, &a)?;
             let slots = self.caps.slots();
             rec.dispatch_indirect(&k.compact_clusters, &[&self.slots, &self.slot_rank, &self.page_of_alloc, &self.unique], &with(slots), &self.dispatch_args, ARGS_COMPACT)
@@ -259,7 +260,7 @@ impl ClusterBuffers {
                 None => k.cluster_light_counts.kernel.invocations(),
                 Some(_) => rec.subgroup_items_per_group(&k.cluster_light_counts_bvh),
             };
-            let p = IndirectParams { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1, items_per_group: per_group, growth: 1, offset: ARGS_ASSIGNMENT, levels: 1, _pad: [0; 2] };
+            let p = IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, per_group, ARGS_ASSIGNMENT);
             rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
             match walk {
                 None => rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,

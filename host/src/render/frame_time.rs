@@ -65,28 +65,31 @@ pub fn sample(main: Option<(f64, f64)>, asynchronous: Option<(f64, f64)>, across
     Some(FrameSample { frame_ms, main_ms, async_ms, overlap_ms: (main_ms + async_ms - frame_ms).max(0.0), non_raster_ms: (frame_ms - raster_ms).max(0.0) })
 }
 
+/// (median, min, max) of `values` (the upper median of an even count); `None` for none. The
+/// frame loop's per-pass medians use it too.
+pub fn spread(values: impl IntoIterator<Item = f64>) -> Option<(f64, f64, f64)> {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    v.sort_by(f64::total_cmp);
+    Some((*v.get(v.len() / 2)?, v[0], v[v.len() - 1]))
+}
+
 /// Medians over the timed frames (and the frame's extremes).
 pub fn median(samples: &[FrameSample], across_queues: bool) -> FrameTime {
-    if samples.is_empty() {
+    let of = |f: fn(&FrameSample) -> f64| spread(samples.iter().map(f));
+    let (Some(frame), Some(non_raster)) = (of(|s| s.frame_ms), of(|s| s.non_raster_ms)) else {
         return FrameTime { across_queues, ..FrameTime::default() };
-    }
-    let med = |f: fn(&FrameSample) -> f64| {
-        let mut v: Vec<f64> = samples.iter().map(f).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
     };
-    let lo = |f: fn(&FrameSample) -> f64| samples.iter().map(f).fold(f64::INFINITY, f64::min);
-    let hi = |f: fn(&FrameSample) -> f64| samples.iter().map(f).fold(0.0, f64::max);
+    let med = |f: fn(&FrameSample) -> f64| of(f).map_or(0.0, |m| m.0);
     FrameTime {
-        ms: med(|s| s.frame_ms),
-        min_ms: lo(|s| s.frame_ms),
-        max_ms: hi(|s| s.frame_ms),
-        non_raster_min_ms: lo(|s| s.non_raster_ms),
-        non_raster_max_ms: hi(|s| s.non_raster_ms),
+        ms: frame.0,
+        min_ms: frame.1,
+        max_ms: frame.2,
+        non_raster_ms: non_raster.0,
+        non_raster_min_ms: non_raster.1,
+        non_raster_max_ms: non_raster.2,
         main_ms: med(|s| s.main_ms),
         async_ms: med(|s| s.async_ms),
         overlap_ms: med(|s| s.overlap_ms),
-        non_raster_ms: med(|s| s.non_raster_ms),
         across_queues,
         timed: true,
     }
@@ -118,5 +121,7 @@ mod tests {
         let t = median(&[f(3.0), f(1.0), f(2.0)], true);
         assert_eq!((t.ms, t.min_ms, t.max_ms, t.non_raster_ms, t.non_raster_min_ms, t.non_raster_max_ms, t.timed), (2.0, 1.0, 3.0, 1.0, 0.5, 1.5, true));
         assert!(!median(&[], false).timed);
+        assert_eq!(spread([4.0, 1.0, 3.0, 2.0]), Some((3.0, 1.0, 4.0)));
+        assert_eq!(spread([]), None);
     }
 }

@@ -357,9 +357,9 @@ fn median_timings(all: &[Vec<PassTiming>]) -> (Vec<PassTiming>, Vec<(f64, f64)>)
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let mut v: Vec<f64> = all.iter().filter_map(|f| f.get(i).map(|t| t.ms)).collect();
-            v.sort_by(|a, b| a.total_cmp(b));
-            (PassTiming { ms: v[v.len() / 2], ..p.clone() }, (v[0], v[v.len() - 1]))
+            // The first frame has pass i, so the spread is of at least one value.
+            let (ms, lo, hi) = frame_time::spread(all.iter().filter_map(|f| f.get(i).map(|t| t.ms))).unwrap_or_default();
+            (PassTiming { ms, ..p.clone() }, (lo, hi))
         })
         .unzip()
 }

@@ -7,7 +7,7 @@
 //! The grand total can be stored into a counter slot (`scan_store_total`), so later kernels
 //! read it without a round trip to the host.
 use crate::gpu::Gpu;
-use crate::vk::{fold, Buffer, Recorder, VkResult};
+use crate::vk::{fold, Buffer, ComputePipeline, Recorder, VkResult};
 use shaders::layout::{CountedTotalParams, IndirectParams, ScanFixParams, ScanParams};
 use shaders::scan::SCAN_WORKGROUP;
 
@@ -24,6 +24,13 @@ pub struct DeviceScan {
     /// Indirect dispatch arguments of a counted scan, one triple per level.
     args: Buffer,
     pub capacity: u32,
+}
+
+/// The elements of a level: known to the host, or counted by the GPU (indirect dispatches).
+#[derive(Clone, Copy, Debug)]
+enum Extent {
+    Host(u32),
+    Counted,
 }
 
 /// A count the GPU knows: `counters[counter] · scale` elements (e.g. allocated pages × slots per
@@ -81,7 +88,7 @@ impl DeviceScan {
             _pad: [0; 2],
         };
         rec.indirect_args(&k.indirect_args, counters, &self.args, &p)?;
-        self.record_counted_level(gpu, rec, 0, input, output)?;
+        self.record_level(gpu, rec, 0, input, output, Extent::Counted)?;
         if let Some(slot) = total {
             let t = CountedTotalParams { count: n.counter, scale: n.scale, total: slot, capacity: self.capacity };
             rec.dispatch(&k.scan_counted_total, &[input, output, counters], &t, [1, 1, 1])?;
@@ -89,23 +96,10 @@ impl DeviceScan {
         Ok(())
     }
 
-    fn record_counted_level(&self, gpu: &Gpu, rec: &mut Recorder<'_>, level: usize, input: &Buffer, output: &Buffer) -> VkResult<()> {
-        let (l, k, offset) = (&self.levels[level], &gpu.kernels, 3 * level as u32);
-        let p = ScanParams { count: l.capacity, _pad: [0; 3] };
-        rec.dispatch_indirect(&k.workgroup_scan, &[input, output, &l.totals], &p, &self.args, offset)?;
-        if level + 1 < self.levels.len() {
-            self.record_counted_level(gpu, rec, level + 1, &l.totals, &l.scanned)?;
-            let fix = ScanFixParams { count: l.capacity, slot: 0, _pad: [0; 2] };
-            // One workgroup of 256 per 256 elements of this level: the same triple.
-            rec.dispatch_indirect(&k.scan_add_offsets, &[&l.scanned, output], &fix, &self.args, offset)?;
-        }
-        Ok(())
-    }
-
     /// Records `output = exclusive_scan(input[..n])` and, with `total`, `counters[slot] = Σ input`.
     pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, input: &Buffer, output: &Buffer, n: u32, total: Option<(&Buffer, u32)>) -> VkResult<()> {
         assert!(n <= self.capacity, "scan of {n} elements exceeds its plan ({})", self.capacity);
-        self.record_level(gpu, rec, 0, input, output, n)?;
+        self.record_level(gpu, rec, 0, input, output, Extent::Host(n))?;
         if let Some((counters, slot)) = total {
             // The top level of *this* scan: the first level whose input fits in one workgroup.
             let mut m = n.max(1);
@@ -120,16 +114,32 @@ impl DeviceScan {
         Ok(())
     }
 
-    fn record_level(&self, gpu: &Gpu, rec: &mut Recorder<'_>, level: usize, input: &Buffer, output: &Buffer, n: u32) -> VkResult<()> {
-        let l = &self.levels[level];
-        let groups = n.max(1).div_ceil(SCAN_WORKGROUP);
-        let p = ScanParams { count: n, _pad: [0; 3] };
-        rec.dispatch(&gpu.kernels.workgroup_scan, &[input, output, &l.totals], &p, fold(groups))?;
-        if groups > 1 {
-            self.record_level(gpu, rec, level + 1, &l.totals, &l.scanned, groups)?;
-            let fix = ScanFixParams { count: n, slot: 0, _pad: [0; 2] };
-            rec.dispatch(&gpu.kernels.scan_add_offsets, &[&l.scanned, output], &fix, fold(n.div_ceil(256)))?;
+    /// Level `level`: its workgroup scan, the levels above it, and the addition of their offsets.
+    fn record_level(&self, gpu: &Gpu, rec: &mut Recorder<'_>, level: usize, input: &Buffer, output: &Buffer, extent: Extent) -> VkResult<()> {
+        let (l, k) = (&self.levels[level], &gpu.kernels);
+        // One workgroup of 256 per 256 elements, for the scan and for the addition alike.
+        let (count, groups, above) = match extent {
+            Extent::Host(n) => {
+                let groups = n.max(1).div_ceil(SCAN_WORKGROUP);
+                (n, Some(groups), (groups > 1).then_some(Extent::Host(groups)))
+            }
+            Extent::Counted => (l.capacity, None, (level + 1 < self.levels.len()).then_some(Extent::Counted)),
+        };
+        let p = ScanParams { count, _pad: [0; 3] };
+        self.dispatch_level(rec, &k.workgroup_scan, &[input, output, &l.totals], &p, level, groups)?;
+        if let Some(above) = above {
+            self.record_level(gpu, rec, level + 1, &l.totals, &l.scanned, above)?;
+            let fix = ScanFixParams { count, slot: 0, _pad: [0; 2] };
+            self.dispatch_level(rec, &k.scan_add_offsets, &[&l.scanned, output], &fix, level, groups)?;
         }
         Ok(())
+    }
+
+    /// Dispatches `groups` workgroups, or with `None` the counted level's indirect triple.
+    fn dispatch_level<P: bytemuck::Pod>(&self, rec: &mut Recorder<'_>, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, level: usize, groups: Option<u32>) -> VkResult<()> {
+        match groups {
+            Some(g) => rec.dispatch(pipe, buffers, params, fold(g)),
+            None => rec.dispatch_indirect(pipe, buffers, params, &self.args, 3 * level as u32),
+        }
     }
 }
