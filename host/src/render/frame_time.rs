@@ -6,7 +6,7 @@
 //! (nor the sum of one queue's pass times, which leaves out waits and gaps) is the frame.
 //!
 //! Per timed frame ([`sample`]):
-//! 1. each queue's span, first to last timestamp of its submission (`vk::Profiler::span_ms`);
+//! 1. each queue's span, first to last timestamp of its submission (`vk::Profiler::results_and_span`);
 //! 2. the frame: from the earlier start to the later end of both spans — where the device's
 //!    timestamps share one time line across queues (`DeviceInfo::timestamps_across_queues`).
 //!    Elsewhere the spans cannot be compared, and the frame is the longer span: a lower bound,

@@ -305,10 +305,10 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             continue; // re-run this frame
         }
         if f > 0 || s.frames == 0 {
-            let mut t = async_profiler.results()?;
-            t.extend(profiler.results()?);
+            let ((mut t, async_span), (main_passes, main_span)) = (async_profiler.results_and_span()?, profiler.results_and_span()?);
+            t.extend(main_passes);
             let raster_ms = t.iter().filter(|p| p.raster && p.queue == Queue::Main).map(|p| p.ms).sum();
-            frame_samples.extend(frame_time::sample(profiler.span_ms()?, async_profiler.span_ms()?, across_queues, raster_ms));
+            frame_samples.extend(frame_time::sample(main_span, async_span, across_queues, raster_ms));
             timings_all.push(t);
         }
         f += 1;

@@ -17,6 +17,9 @@ pub enum Queue {
     AsyncCompute,
 }
 
+/// A submission's first and last timestamp, milliseconds on the device's time line.
+pub type Span = (f64, f64);
+
 /// One timed pass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
@@ -127,31 +130,33 @@ impl Profiler {
 
     /// The timings of the last submission (call after it completed).
     pub fn results(&self) -> VkResult<Vec<PassTiming>> {
+        Ok(self.results_and_span()?.0)
+    }
+
+    /// The timings of the last submission and its span on the device's time line: (first
+    /// timestamp, last timestamp) in milliseconds of device ticks, `None` when nothing was timed.
+    /// The end is unwrapped past the start where the counter wrapped. Spans of different queues
+    /// are comparable only where
+    /// [`DeviceInfo::timestamps_across_queues`](super::DeviceInfo::timestamps_across_queues).
+    /// One read of the queries serves both.
+    pub fn results_and_span(&self) -> VkResult<(Vec<PassTiming>, Option<Span>)> {
         let raw = self.raw()?;
-        let (mask, period) = (self.mask(), self.ctx.info.timestamp_period_ns as f64);
-        Ok(self
+        let (mask, period) = (self.mask(), self.ctx.info.timestamp_period_ns as f64 * 1e-6);
+        let passes = self
             .names
             .iter()
             .enumerate()
             .take(raw.len() / 2)
             .map(|(i, n)| {
                 let ticks = raw[2 * i + 1].wrapping_sub(raw[2 * i]) & mask;
-                PassTiming { name: n.clone(), ms: ticks as f64 * period * 1e-6, queue: self.queue, raster: self.raster[i] }
+                PassTiming { name: n.clone(), ms: ticks as f64 * period, queue: self.queue, raster: self.raster[i] }
             })
-            .collect())
-    }
-
-    /// The last submission's span on the device's time line: (first timestamp, last timestamp)
-    /// in milliseconds of device ticks, `None` when nothing was timed. The end is unwrapped
-    /// past the start where the counter wrapped. Spans of different queues are comparable only
-    /// where [`DeviceInfo::timestamps_across_queues`](super::DeviceInfo::timestamps_across_queues).
-    pub fn span_ms(&self) -> VkResult<Option<(f64, f64)>> {
-        let raw = self.raw()?;
-        let Some(&start) = raw.first() else { return Ok(None) };
-        let mask = self.mask();
-        let longest = raw.iter().map(|&t| t.wrapping_sub(start) & mask).max().unwrap_or(0);
-        let period = self.ctx.info.timestamp_period_ns as f64 * 1e-6;
-        Ok(Some((start as f64 * period, (start as f64 + longest as f64) * period)))
+            .collect();
+        let span = raw.first().map(|&start| {
+            let longest = raw.iter().map(|&t| t.wrapping_sub(start) & mask).max().unwrap_or(0);
+            (start as f64 * period, (start as f64 + longest as f64) * period)
+        });
+        Ok((passes, span))
     }
 }
 
