@@ -5,12 +5,13 @@
 //! # Steps (one entry each; each unpacks its invocation's [`shading::linear_index`] and calls a
 //! pure function)
 //!
-//! 1–5. **Unique clusters** — [`pixel_keys`], [`mark_pages`], (scan) [`record_pages`],
-//!    [`store_slots`], (scan) [`compact_clusters`]: the page table of [`crate::page_table`]
-//!    (steps and memory there).
+//! 1–5. **Unique clusters** — [`pixel_keys`] (keys, and the marks of their pages), (scan)
+//!    [`record_pages`], [`store_slots`], (scan) [`compact_clusters`]: the page table of
+//!    [`crate::page_table`] (steps and memory there). Each mark and slot is cleared by its last
+//!    reader, so no frame clears the tables at their capacity.
 //! 6–7. **Naive assignment** — [`cluster_light_counts`], (scan) [`cluster_light_fill`]: every
 //!    light against each unique cluster's box ([`for_each_cluster_light`], [`crate::lighting`],
-//!    [`crate::cluster_bounds`]); `clustered-bvh` replaces these two with [`crate::clustered_bvh`].
+//!    [`crate::cluster_bounds`]); `clustered-bvh` replaces them with one walk ([`crate::clustered_bvh`]).
 //! 8. **Shading** — [`shade_clustered_diffuse`] / [`shade_clustered_specular`]: per pixel, key →
 //!    page → slot → cluster → its list, through [`shading::shade_lights`].
 //!
@@ -27,7 +28,7 @@ use crate::{cluster_bounds, cluster_test, lighting};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
-/// 1. Cluster key per pixel from the depth buffer.
+/// 1–2. Cluster key per pixel from the depth buffer, and the mark of its page.
 #[spirv(compute(threads(256)))]
 pub fn pixel_keys(
     #[spirv(workgroup_id)] wg: UVec3,
@@ -37,30 +38,15 @@ pub fn pixel_keys(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] bounds: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] keys: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] marks: &mut [u32],
 ) {
     let i = linear_index(wg, nwg, local);
     if i >= p.count {
         return;
     }
     let g = &p.grid;
-    keys[i as usize] = page_table::pixel_key(g, bounds, i % g.width, i / g.width, depth[i as usize]);
-}
-
-/// 2. Mark the pages pixels touch.
-#[spirv(compute(threads(256)))]
-pub fn mark_pages(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] keys: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] marks: &mut [u32],
-) {
-    let i = linear_index(wg, nwg, local);
-    if i >= p.count {
-        return;
-    }
-    let key = keys[i as usize];
+    let key = page_table::pixel_key(g, bounds, i % g.width, i / g.width, depth[i as usize]);
+    keys[i as usize] = key;
     if key != INVALID_KEY {
         marks[page_table::page_of(key) as usize] = 1;
     }
@@ -73,13 +59,15 @@ pub fn record_pages(
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] marks: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] marks: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_base: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] page_of_alloc: &mut [u32],
 ) {
     let i = linear_index(wg, nwg, local);
     if i < p.count && marks[i as usize] != 0 {
         page_of_alloc[page_base[i as usize] as usize] = i;
+        // The mark's last reader: cleared for the next frame.
+        marks[i as usize] = 0;
     }
 }
 
@@ -112,7 +100,7 @@ pub fn compact_clusters(
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slots: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slots: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] slot_rank: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] page_of_alloc: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] unique: &mut [u32],
@@ -120,6 +108,8 @@ pub fn compact_clusters(
     let s = linear_index(wg, nwg, local);
     if s < p.count && slots[s as usize] != 0 {
         unique[slot_rank[s as usize] as usize] = page_table::key_of_slot(page_of_alloc, s);
+        // The slot's last reader: cleared for the next frame (the frame's allocated pages only).
+        slots[s as usize] = 0;
     }
 }
 

@@ -58,8 +58,7 @@ pub const DEBUG_VIEW: Kernel<DebugViewParams> = Kernel::new("entries::debug_view
 const fn linear<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
     Kernel::new(entry, storage_buffers, [256, 1, 1], false)
 }
-pub const PIXEL_KEYS: Kernel<FrameParams> = linear("clustered::pixel_keys", 3);
-pub const MARK_PAGES: Kernel<FrameParams> = linear("clustered::mark_pages", 2);
+pub const PIXEL_KEYS: Kernel<FrameParams> = linear("clustered::pixel_keys", 4);
 pub const RECORD_PAGES: Kernel<FrameParams> = linear("clustered::record_pages", 3);
 pub const STORE_SLOTS: Kernel<FrameParams> = linear("clustered::store_slots", 3);
 pub const COMPACT_CLUSTERS: Kernel<FrameParams> = linear("clustered::compact_clusters", 4);
@@ -95,11 +94,9 @@ pub const RADIX_CHAINED: Kernel<RadixParams> = radix("entries::radix_chained", 6
 pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
 pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 3);
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
-/// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
-pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 7, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
-pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 8, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+/// One subgroup per unique cluster (subgroup-parallel walk, one walk per cluster): cooperative.
+pub const CLUSTER_LIGHTS_ASSIGN_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::cluster_lights_assign_bvh", 9, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
 pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
@@ -133,7 +130,6 @@ pub const ALL: &[Kernel<()>] = &[
     WORKGROUP_SCAN.erased(),
     DEBUG_VIEW.erased(),
     PIXEL_KEYS.erased(),
-    MARK_PAGES.erased(),
     RECORD_PAGES.erased(),
     STORE_SLOTS.erased(),
     COMPACT_CLUSTERS.erased(),
@@ -156,8 +152,7 @@ pub const ALL: &[Kernel<()>] = &[
     LIGHT_KEYS.erased(),
     BVH_LEAVES.erased(),
     BVH_LEVEL.erased(),
-    CLUSTER_LIGHT_COUNTS_BVH.erased(),
-    CLUSTER_LIGHT_FILL_BVH.erased(),
+    CLUSTER_LIGHTS_ASSIGN_BVH.erased(),
     SHADE_TILED_DIFFUSE.erased(),
     SHADE_TILED_SPECULAR.erased(),
     AABB_BOUNDS.erased(),

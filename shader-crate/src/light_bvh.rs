@@ -367,4 +367,4 @@ pub fn walk_subgroup<C: Coop>(
 
 #[cfg(test)]
 #[path = "light_bvh_tests.rs"]
-mod tests;
+pub(crate) mod tests;

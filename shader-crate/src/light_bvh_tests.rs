@@ -8,7 +8,7 @@ fn contains(outer: &ClusterAabb, inner: &ClusterAabb) -> bool {
 }
 
 /// Builds the tree on the CPU with the kernels' functions.
-fn build(lights: &[PointLight], order: &[u32], b: u32) -> Vec<ClusterAabb> {
+pub(crate) fn build(lights: &[PointLight], order: &[u32], b: u32) -> Vec<ClusterAabb> {
     let n = lights.len() as u32;
     let mut nodes = vec![EMPTY_BOX; total_nodes(n, b) as usize];
     for node in 0..level_nodes(n, 0, b) {
@@ -23,7 +23,8 @@ fn build(lights: &[PointLight], order: &[u32], b: u32) -> Vec<ClusterAabb> {
     nodes
 }
 
-fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
+/// `n` lights with xorshift positions in a 100 × 20 × 100 m box and radii up to `radius`.
+pub(crate) fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
     let mut x = seed | 1;
     let mut r = move || {
         x ^= x << 13;
@@ -36,7 +37,8 @@ fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
         .collect()
 }
 
-fn brute_force(ls: &[PointLight], cluster: &ClusterAabb) -> Vec<u32> {
+/// The lights whose sphere meets `cluster`, in index order.
+pub(crate) fn brute_force(ls: &[PointLight], cluster: &ClusterAabb) -> Vec<u32> {
     (0..ls.len() as u32)
         .filter(|&l| {
             let p = &ls[l as usize];

@@ -10,7 +10,11 @@
 //!    in page order); marked pages also record `page_of_alloc[page_base[p]] = p`.
 //! 4. **store** — per pixel: `slots[page_base[key >> 9]·512 + (key & 511)] = 1`.
 //! 5. **compact** — exclusive scan of `slots` → `slot_rank`; per set slot `s`:
-//!    `unique[slot_rank[s]] = key_of_slot(s)`. Because pages are allocated in page order and
+//!    `unique[slot_rank[s]] = key_of_slot(s)`.
+//!
+//! Marks and slots start at zero once (at allocation) and each is cleared by its last reader
+//! (allocation clears the marks it records, compaction the slots it scatters), so a frame touches
+//! the slots of its own pages only and never clears a table at capacity. Because pages are allocated in page order and
 //!    slots scanned in order, `unique` is the *sorted* list of distinct keys, and
 //!    `slot_rank[slot of key]` is the cluster index a pixel uses to find its light list.
 //!

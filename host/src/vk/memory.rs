@@ -77,6 +77,19 @@ impl Buffer {
         Self::new(ctx, name, size, STORAGE, MemoryLocation::GpuOnly)
     }
 
+    /// A device-local storage buffer of `size` bytes, zero once at creation: for buffers whose
+    /// kernels clear what they used, so that no frame clears them at capacity.
+    pub fn zeroed(ctx: &Context, name: &str, size: u64) -> VkResult<Self> {
+        let b = Self::storage(ctx, name, size)?;
+        let dst = b.raw;
+        ctx.submit_and_wait(|cmd| {
+            unsafe { ctx.device.cmd_fill_buffer(cmd, dst, 0, vk::WHOLE_SIZE, 0) };
+            barrier(ctx, cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+            Ok(())
+        })?;
+        Ok(b)
+    }
+
     /// A device-local index (and storage) buffer holding `indices` (a word for none).
     pub fn indices(ctx: &Context, name: &str, indices: &[u32]) -> VkResult<Self> {
         let mut b = Self::new(ctx, name, 4 * indices.len().max(1) as u64, STORAGE | vk::BufferUsageFlags::INDEX_BUFFER, MemoryLocation::GpuOnly)?;
