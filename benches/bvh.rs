@@ -111,11 +111,11 @@ fn bvh(c: &mut Criterion) {
                 b.iter_custom(|iters| {
                     let start = Instant::now();
                     for _ in 0..iters {
-                        let (order, nodes) = render::bvh::build_cpu(&lights_view, branching);
+                        let (order, spheres, nodes) = render::bvh::build_cpu(&lights_view, branching);
                         let mut refs = 0u64;
                         for &key in &rb.unique {
                             let cluster = shaders::cluster_bounds::cluster_aabb_of_key(&p.grid, &rb.bounds, key);
-                            refs += shaders::light_bvh::for_each_bvh_light(&nodes, &lights_view, &order, p.num_lights, branching, &cluster, |_, _| {}) as u64;
+                            refs += shaders::light_bvh::for_each_bvh_light(&nodes, &spheres, &order, p.num_lights, branching, &cluster, |_, _| {}) as u64;
                         }
                         black_box(refs);
                     }

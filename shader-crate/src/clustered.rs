@@ -11,7 +11,7 @@
 //!    reader, so no frame clears the tables at their capacity.
 //! 6–7. **Naive assignment** — [`cluster_light_counts`], (scan) [`cluster_light_fill`]: every
 //!    light against each unique cluster's box ([`for_each_cluster_light`], [`crate::lighting`],
-//!    [`crate::cluster_bounds`]); `clustered-bvh` replaces them with one walk ([`crate::clustered_bvh`]).
+//!    [`crate::cluster_bounds`]); `clustered-bvh` replaces these two with [`crate::clustered_bvh`].
 //! 8. **Shading** — [`shade_clustered_diffuse`] / [`shade_clustered_specular`]: per pixel, key →
 //!    page → slot → cluster → its list, through [`shading::shade_lights`].
 //!
@@ -47,7 +47,9 @@ pub fn pixel_keys(
     let g = &p.grid;
     let key = page_table::pixel_key(g, bounds, i % g.width, i / g.width, depth[i as usize]);
     keys[i as usize] = key;
-    if key != INVALID_KEY {
+    // Most pixels find their page marked already: a load instead of a store to a word that
+    // thousands of pixels share.
+    if key != INVALID_KEY && marks[page_table::page_of(key) as usize] == 0 {
         marks[page_table::page_of(key) as usize] = 1;
     }
 }
@@ -89,7 +91,11 @@ pub fn store_slots(
     let key = keys[i as usize];
     if key != INVALID_KEY {
         let base = page_base[page_table::page_of(key) as usize];
-        slots[page_table::slot_index(base, key) as usize] = 1;
+        let slot = page_table::slot_index(base, key) as usize;
+        // A load first: a cluster's pixels share its slot.
+        if slots[slot] == 0 {
+            slots[slot] = 1;
+        }
     }
 }
 

@@ -92,11 +92,14 @@ pub const RADIX_CHAINED: Kernel<RadixParams> = radix("entries::radix_chained", 6
 
 // Clustered-BVH technique (`clustered_bvh.rs`).
 pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
-pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 3);
+pub const BVH_SPHERES: Kernel<BvhParams> = linear("clustered_bvh::bvh_spheres", 3);
+pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 2);
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
-/// One subgroup per unique cluster (subgroup-parallel walk, one walk per cluster): cooperative.
-pub const CLUSTER_LIGHTS_ASSIGN_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_lights_assign_bvh", 9, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+/// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
+pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 7, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 8, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
 pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
@@ -150,9 +153,11 @@ pub const ALL: &[Kernel<()>] = &[
     RADIX_SORT_TILE.erased(),
     RADIX_CHAINED.erased(),
     LIGHT_KEYS.erased(),
+    BVH_SPHERES.erased(),
     BVH_LEAVES.erased(),
     BVH_LEVEL.erased(),
-    CLUSTER_LIGHTS_ASSIGN_BVH.erased(),
+    CLUSTER_LIGHT_COUNTS_BVH.erased(),
+    CLUSTER_LIGHT_FILL_BVH.erased(),
     SHADE_TILED_DIFFUSE.erased(),
     SHADE_TILED_SPECULAR.erased(),
     AABB_BOUNDS.erased(),

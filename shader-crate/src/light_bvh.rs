@@ -20,7 +20,7 @@
 //! the naive search), and every ancestor box contains the light's sphere box, so both walks give
 //! the naive lists as sets (in Morton order instead of index order).
 use crate::coop::{ballot_count, ballot_rank, Coop};
-use crate::layout::{ClusterAabb, PointLight};
+use crate::layout::{ClusterAabb, LightSphere, PointLight};
 use crate::lighting;
 use spirv_std::glam::Vec3;
 
@@ -114,6 +114,18 @@ impl Levels {
 /// Box of a light's sphere.
 #[inline]
 pub fn light_box(l: &PointLight) -> ClusterAabb {
+    sphere_box(&sphere_of(l))
+}
+
+/// The bounding sphere of a light.
+#[inline]
+pub fn sphere_of(l: &PointLight) -> LightSphere {
+    LightSphere { position: l.position, radius: l.radius }
+}
+
+/// Box of a light's sphere (a negative radius counts as 0).
+#[inline]
+pub fn sphere_box(l: &LightSphere) -> ClusterAabb {
     let r = if l.radius > 0.0 { l.radius } else { 0.0 };
     let p = l.position;
     ClusterAabb { min: [p[0] - r, p[1] - r, p[2] - r], _pad0: 0.0, max: [p[0] + r, p[1] + r, p[2] + r], _pad1: 0.0 }
@@ -141,14 +153,21 @@ pub fn boxes_overlap(a: &ClusterAabb, b: &ClusterAabb) -> bool {
     !(a.max[0] < b.min[0] || b.max[0] < a.min[0] || a.max[1] < b.min[1] || b.max[1] < a.min[1] || a.max[2] < b.min[2] || b.max[2] < a.min[2])
 }
 
-/// Box of level-0 node `node`: its lights (sorted order; `order[s]` is the light index).
+/// The spheres of the lights in sorted order: `spheres[s]` is light `order[s]`'s (step 2a of the
+/// build, one invocation per light on the GPU).
+#[cfg(not(target_arch = "spirv"))]
+pub fn sorted_spheres(lights: &[PointLight], order: &[u32]) -> Vec<LightSphere> {
+    order.iter().map(|&i| sphere_of(&lights[i as usize])).collect()
+}
+
+/// Box of level-0 node `node`: its lights' spheres (sorted order).
 #[inline]
-pub fn leaf_node_box(lights: &[PointLight], order: &[u32], n: u32, b: u32, node: u32) -> ClusterAabb {
+pub fn leaf_node_box(spheres: &[LightSphere], n: u32, b: u32, node: u32) -> ClusterAabb {
     let mut bx = EMPTY_BOX;
     let first = node * b;
     let mut s = first;
     while s < first + b && s < n {
-        bx = union(&bx, &light_box(&lights[order[s as usize] as usize]));
+        bx = union(&bx, &sphere_box(&spheres[s as usize]));
         s += 1;
     }
     bx
@@ -171,8 +190,8 @@ pub fn inner_node_box(nodes: &[ClusterAabb], n: u32, b: u32, level: u32, node: u
 
 /// Whether light `s` of the sorted order meets `cluster`.
 #[inline]
-fn light_hits(lights: &[PointLight], order: &[u32], s: u32, cluster: &ClusterAabb) -> bool {
-    let light = lights[order[s as usize] as usize];
+fn light_hits(spheres: &[LightSphere], s: u32, cluster: &ClusterAabb) -> bool {
+    let light = spheres[s as usize];
     lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, cluster)
 }
 
@@ -182,7 +201,7 @@ fn light_hits(lights: &[PointLight], order: &[u32], s: u32, cluster: &ClusterAab
 #[allow(clippy::too_many_arguments)]
 pub fn for_each_bvh_light(
     nodes: &[ClusterAabb],
-    lights: &[PointLight],
+    spheres: &[LightSphere],
     order: &[u32],
     n: u32,
     b: u32,
@@ -224,7 +243,7 @@ pub fn for_each_bvh_light(
             while s0 < last {
                 unroll8!(u => {
                     let s = s0 + u;
-                    if s < last && light_hits(lights, order, s, cluster) {
+                    if s < last && light_hits(spheres, s, cluster) {
                         emit(found, order[s as usize]);
                         found += 1;
                     }
@@ -302,7 +321,7 @@ fn pop_lowest(mask: &mut [u32; 2]) -> u32 {
 pub fn walk_subgroup<C: Coop>(
     c: &C,
     nodes: &[ClusterAabb],
-    lights: &[PointLight],
+    spheres: &[LightSphere],
     order: &[u32],
     n: u32,
     b: u32,
@@ -343,7 +362,7 @@ pub fn walk_subgroup<C: Coop>(
                     let chunk = ch + u * w;
                     if chunk < b {
                         let s = child0 + chunk + lane;
-                        let hit = s < last && light_hits(lights, order, s, cluster);
+                        let hit = s < last && light_hits(spheres, s, cluster);
                         let vote = c.ballot(hit);
                         if hit {
                             emit(found + ballot_rank(vote, lane), order[s as usize]);
@@ -367,4 +386,4 @@ pub fn walk_subgroup<C: Coop>(
 
 #[cfg(test)]
 #[path = "light_bvh_tests.rs"]
-pub(crate) mod tests;
+mod tests;

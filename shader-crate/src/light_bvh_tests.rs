@@ -8,11 +8,11 @@ fn contains(outer: &ClusterAabb, inner: &ClusterAabb) -> bool {
 }
 
 /// Builds the tree on the CPU with the kernels' functions.
-pub(crate) fn build(lights: &[PointLight], order: &[u32], b: u32) -> Vec<ClusterAabb> {
-    let n = lights.len() as u32;
+fn build(spheres: &[LightSphere], b: u32) -> Vec<ClusterAabb> {
+    let n = spheres.len() as u32;
     let mut nodes = vec![EMPTY_BOX; total_nodes(n, b) as usize];
     for node in 0..level_nodes(n, 0, b) {
-        nodes[node as usize] = leaf_node_box(lights, order, n, b, node);
+        nodes[node as usize] = leaf_node_box(spheres, n, b, node);
     }
     for level in 1..level_count(n, b) {
         for node in 0..level_nodes(n, level, b) {
@@ -23,8 +23,7 @@ pub(crate) fn build(lights: &[PointLight], order: &[u32], b: u32) -> Vec<Cluster
     nodes
 }
 
-/// `n` lights with xorshift positions in a 100 × 20 × 100 m box and radii up to `radius`.
-pub(crate) fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
+fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
     let mut x = seed | 1;
     let mut r = move || {
         x ^= x << 13;
@@ -37,8 +36,7 @@ pub(crate) fn lights(n: usize, seed: u32, radius: f32) -> Vec<PointLight> {
         .collect()
 }
 
-/// The lights whose sphere meets `cluster`, in index order.
-pub(crate) fn brute_force(ls: &[PointLight], cluster: &ClusterAabb) -> Vec<u32> {
+fn brute_force(ls: &[PointLight], cluster: &ClusterAabb) -> Vec<u32> {
     (0..ls.len() as u32)
         .filter(|&l| {
             let p = &ls[l as usize];
@@ -58,7 +56,8 @@ fn nodes_contain_children_and_traversal_equals_brute_force() {
         for (n, radius) in CASES {
             let ls = lights(n, n as u32, radius);
             let order: Vec<u32> = (0..n as u32).rev().collect(); // any permutation is a valid order
-            let nodes = build(&ls, &order, b);
+            let spheres = sorted_spheres(&ls, &order);
+            let nodes = build(&spheres, b);
             let nn = n as u32;
             for node in 0..level_nodes(nn, 0, b) {
                 let bx = nodes[node as usize];
@@ -79,7 +78,7 @@ fn nodes_contain_children_and_traversal_equals_brute_force() {
             for (i, c) in lights(64, 7, 15.0).iter().enumerate() {
                 let cluster = light_box(c);
                 let mut got = Vec::new();
-                let count = for_each_bvh_light(&nodes, &ls, &order, nn, b, &cluster, |_, l| got.push(l));
+                let count = for_each_bvh_light(&nodes, &spheres, &order, nn, b, &cluster, |_, l| got.push(l));
                 got.sort_unstable();
                 assert_eq!(count as usize, got.len());
                 assert_eq!(got, brute_force(&ls, &cluster), "b={b} n={n}, cluster {i}");
@@ -97,13 +96,14 @@ fn subgroup_walk_equals_brute_force_at_every_width() {
         for (n, radius) in CASES {
             let ls = lights(n, n as u32 ^ 0x55, radius);
             let order: Vec<u32> = (0..n as u32).map(|i| (i * 7919) % n as u32).collect(); // a permutation (7919 is prime)
-            let nodes = build(&ls, &order, b);
+            let spheres = sorted_spheres(&ls, &order);
+            let nodes = build(&spheres, b);
             let clusters: Vec<ClusterAabb> = lights(6, 11, 15.0).iter().map(light_box).collect();
             for width in [4, 8, 16, 32, 64] {
                 let emu = Emulation { width, workgroup_size: width, shared_words: 0 };
                 let per_lane = run_workgroups(emu, clusters.len() as u32, |g, c, _| {
                     let mut emitted = Vec::new();
-                    let count = walk_subgroup(c, &nodes, &ls, &order, n as u32, b, &clusters[g as usize], |k, l| emitted.push((k, l)));
+                    let count = walk_subgroup(c, &nodes, &spheres, &order, n as u32, b, &clusters[g as usize], |k, l| emitted.push((k, l)));
                     (count, emitted)
                 });
                 for (g, cluster) in clusters.iter().enumerate() {

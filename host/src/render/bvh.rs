@@ -1,11 +1,12 @@
 //! The light BVH of `clustered-bvh` (`shaders::light_bvh`): Morton keys of the view-space lights
-//! → GPU sort, radix or bitonic (key = 30-bit Morton code, value = light index) → node boxes built level by
-//! level, bottom-up, with `branching` (32 or 64) children per node. Memory: 4 B keys + 4 B order
-//! per light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
+//! → GPU sort, radix or bitonic (key = 30-bit Morton code, value = light index) → the lights'
+//! spheres gathered into sorted order → node boxes built level by level, bottom-up, with
+//! `branching` (32 or 64) children per node. Memory: 4 B keys + 4 B order + 16 B sphere per
+//! light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
 use super::sort::{LightSorter, SortKind};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
-use shaders::layout::{BvhParams, MortonParams, PointLight};
+use shaders::layout::{BvhParams, LightSphere, MortonParams, PointLight};
 use shaders::light_bvh::{level_count, level_nodes, level_offset, total_nodes, valid_branching};
 use shaders::morton::{MortonQuantizer, MORTON30_BITS, MORTON63_BITS};
 
@@ -15,6 +16,8 @@ pub struct LightBvh {
     pub branching: u32,
     keys: Buffer,
     pub order: Buffer,
+    /// The lights' spheres in sorted order (what the leaves and the walks test).
+    pub spheres: Buffer,
     pub nodes: Buffer,
     sort: LightSorter,
     quantizers: MortonParams,
@@ -40,6 +43,7 @@ impl LightBvh {
             branching,
             keys: Buffer::storage(ctx, "light Morton keys", 4 * n as u64)?,
             order: Buffer::storage(ctx, "light order", 4 * n as u64)?,
+            spheres: Buffer::storage(ctx, "sorted light spheres", 16 * n.max(1) as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
             sort: LightSorter::new(gpu, sort, n.max(1))?,
             quantizers: MortonParams {
@@ -52,7 +56,7 @@ impl LightBvh {
     }
 
     pub fn bytes(&self) -> u64 {
-        self.keys.size + self.order.size + self.nodes.size + self.sort.bytes()
+        self.keys.size + self.order.size + self.spheres.size + self.nodes.size + self.sort.bytes()
     }
 
     /// Records the Morton keys ("morton keys"), their sort ("light sort") and the level-by-level
@@ -69,7 +73,8 @@ impl LightBvh {
             let b = self.branching;
             let leaves = level_nodes(n, 0, b);
             let p = BvhParams { count: n, level: 0, nodes: leaves, branching: b };
-            rec.dispatch_linear(&k.bvh_leaves, &[lights, &self.order, &self.nodes], &p, leaves)?;
+            rec.dispatch_linear(&k.bvh_spheres, &[lights, &self.order, &self.spheres], &p, n)?;
+            rec.dispatch_linear(&k.bvh_leaves, &[&self.spheres, &self.nodes], &p, leaves)?;
             for level in 1..level_count(n, b) {
                 let nodes = level_nodes(n, level, b);
                 let p = BvhParams { count: n, level, nodes, branching: b };
@@ -98,21 +103,23 @@ fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
 
 /// The same BVH on the CPU, from the kernels' own functions run one after the other: Morton keys
 /// of `lights` (view space) → `sort_unstable_by_key` → leaf and inner node boxes. Returns the
-/// sorted order and the nodes (the CPU baseline of benches/bvh.rs, and a test oracle).
-pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shaders::layout::ClusterAabb>) {
-    use shaders::light_bvh::{inner_node_box, leaf_node_box, EMPTY_BOX};
+/// sorted order, the sorted spheres and the nodes (the CPU baseline of benches/bvh.rs, and a test
+/// oracle).
+pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<LightSphere>, Vec<shaders::layout::ClusterAabb>) {
+    use shaders::light_bvh::{inner_node_box, leaf_node_box, sorted_spheres, EMPTY_BOX};
     let n = lights.len() as u32;
     let (lo, hi) = position_bounds(lights);
     let q = MortonQuantizer::new(lo, hi, MORTON30_BITS);
     let mut keyed: Vec<(u32, u32)> = lights.iter().enumerate().map(|(i, l)| (q.morton30_of(l.position), i as u32)).collect();
     keyed.sort_unstable_by_key(|e| e.0);
     let order: Vec<u32> = keyed.into_iter().map(|e| e.1).collect();
+    let spheres = sorted_spheres(lights, &order);
     let mut nodes = vec![EMPTY_BOX; total_nodes(n.max(1), branching) as usize];
     if n == 0 {
-        return (order, nodes);
+        return (order, spheres, nodes);
     }
     for node in 0..level_nodes(n, 0, branching) {
-        nodes[node as usize] = leaf_node_box(lights, &order, n, branching, node);
+        nodes[node as usize] = leaf_node_box(&spheres, n, branching, node);
     }
     for level in 1..level_count(n, branching) {
         for node in 0..level_nodes(n, level, branching) {
@@ -120,5 +127,5 @@ pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<shader
             nodes[(level_offset(n, level, branching) + node) as usize] = b;
         }
     }
-    (order, nodes)
+    (order, spheres, nodes)
 }

@@ -2,20 +2,19 @@
 //! in Karas' Vulkan design (virtual page table of unique clusters, Morton-sorted lights in a
 //! light BVH), one kernel per step:
 //! 1. **G-buffer** (raster, recorded by the frame loop) → depth | normal | albedo buffers.
-//! 2. **keys** — cluster key per pixel, and its page's mark (`clustered::pixel_keys`): 32 px tiles × exponential
-//!    depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
+//! 2. **keys** — cluster key per pixel, and its page's mark (`clustered::pixel_keys`): 32 px
+//!    tiles × exponential depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
 //! 3. **page table** — (pages marked with the keys) scan (allocate) → record → store slots →
 //!    scan → compact into the sorted unique-cluster list (`page_table`). Allocation is sized from
 //!    the resolution; the slot scan and the compaction cover the pages the frame allocated
 //!    (indirect dispatches from the GPU's page counter, `scan::DeviceScan::record_counted`).
 //!    Marks and slots are cleared by their last readers, never at capacity.
-//! 4. **assignment** — per unique cluster, its light count, list offset and list, dispatched for
-//!    the frame's unique clusters (indirect dispatches from the GPU's cluster counter), never for
-//!    the buffers' capacity. `clustered-naive` tests every light against the cluster's AABB as
-//!    counts → scan → fill; `clustered-bvh` walks the light BVH once per cluster
-//!    in one dispatch (`clustered_bvh::assign_cluster`: count, reserve the range by one atomic
-//!    add, fill). The BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node
-//!    boxes) is built on the async-compute queue, overlapping the G-buffer raster.
+//! 4. **assignment** — per unique cluster, its lights as counts → scan → fill; offsets + counts
+//!    give each cluster's list. All three run for the frame's unique clusters (indirect
+//!    dispatches from the GPU's cluster counter), never for the buffers' capacity.
+//!    `clustered-naive` tests every light against the cluster's AABB; `clustered-bvh` walks the
+//!    light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node boxes, on the
+//!    async-compute queue, overlapping the G-buffer raster).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
@@ -65,7 +64,7 @@ impl Clustered {
     fn new(gpu: &Gpu, f: &FrameInputs<'_>, bvh: Option<LightBvh>) -> Result<Self> {
         let grid = f.params.grid;
         let caps = Capacities::initial(&grid, f.params.num_lights);
-        let buffers = ClusterBuffers::new(gpu, &grid, caps, bvh.is_none()).context("allocating the cluster buffers")?;
+        let buffers = ClusterBuffers::new(gpu, &grid, caps).context("allocating the cluster buffers")?;
         Ok(Self { bvh, grid, buffers, last: (0, 0, 0) })
     }
 }
@@ -91,7 +90,7 @@ impl LightingTechnique for Clustered {
         self.last = (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
         let (_, refs, pages) = self.last;
         let Some(caps) = self.buffers.caps.grown(pages, refs) else { return Ok(None) };
-        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps, self.bvh.is_none())
+        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps)
             .with_context(|| format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs))?;
         Ok(Some(format!("cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)))
     }
@@ -170,14 +169,11 @@ struct ClusterBuffers {
     dispatch_args: Buffer,
     page_scan: DeviceScan,
     slot_scan: DeviceScan,
-    /// The naive assignment's scan of the per-cluster counts (the BVH walk reserves its ranges
-    /// with atomics and needs none).
-    cluster_scan: Option<DeviceScan>,
+    cluster_scan: DeviceScan,
 }
 
 impl ClusterBuffers {
-    /// `naive`: the buffers of the naive assignment (its scan) too.
-    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, naive: bool) -> VkResult<Self> {
+    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities) -> VkResult<Self> {
         let ctx = &gpu.ctx;
         let pixels = grid.width * grid.height;
         let pages = page_count(grid);
@@ -209,7 +205,7 @@ impl ClusterBuffers {
             dispatch_args: words("indirect dispatches", 6)?,
             page_scan: DeviceScan::new(gpu, "pages", pages)?,
             slot_scan: DeviceScan::new(gpu, "slots", slots)?,
-            cluster_scan: if naive { Some(DeviceScan::new(gpu, "clusters", max_clusters)?) } else { None },
+            cluster_scan: DeviceScan::new(gpu, "clusters", max_clusters)?,
         })
     }
 
@@ -220,7 +216,7 @@ impl ClusterBuffers {
             &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args,
         ];
         let mut v: Vec<(String, u64)> = b.iter().map(|b| (b.name.clone(), b.size)).collect();
-        v.push(("scan scratch".into(), self.page_scan.bytes() + self.slot_scan.bytes() + self.cluster_scan.as_ref().map_or(0, DeviceScan::bytes)));
+        v.push(("scan scratch".into(), self.page_scan.bytes() + self.slot_scan.bytes() + self.cluster_scan.bytes()));
         v
     }
 
@@ -265,13 +261,37 @@ impl ClusterBuffers {
         rec.pass("assignment", |rec| {
             // Workgroups for the frame's unique clusters, not for the buffers' capacity.
             let args = &self.dispatch_args;
-            let Some(b) = bvh else { return self.record_naive_assignment(gpu, rec, &c, bounds, lights) };
-            let w = BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] };
-            let assign = &k.cluster_lights_assign_bvh;
-            let per_group = rec.subgroup_items_per_group(assign);
-            rec.indirect_args(&k.indirect_args, &self.counters, args, &IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, per_group, ARGS_ASSIGNMENT))?;
-            let buffers = [&self.unique, &self.counters, bounds, lights, &self.counts, &self.offsets, &self.list, &b.order, &b.nodes];
-            rec.dispatch_indirect(assign, &buffers, &w, args, ARGS_ASSIGNMENT)
+            let walk = bvh.map(|b| (b, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
+            let per_group = match walk {
+                None => k.cluster_light_counts.kernel.invocations(),
+                Some(_) => rec.subgroup_items_per_group(&k.cluster_light_counts_bvh),
+            };
+            let p = IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, per_group, ARGS_ASSIGNMENT);
+            rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
+            match walk {
+                None => rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,
+                Some((b, w)) => rec.dispatch_indirect(
+                    &k.cluster_light_counts_bvh,
+                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes],
+                    &w,
+                    args,
+                    ARGS_ASSIGNMENT,
+                )?,
+            }
+            // Offsets of the unique clusters only (entries past them are never read), and the
+            // light references they sum to.
+            let unique = Counted { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1 };
+            self.cluster_scan.record_counted(gpu, rec, &self.counts, &self.offsets, &self.counters, unique, Some(COUNTER_LIGHT_REFS))?;
+            match walk {
+                None => rec.dispatch_indirect(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
+                Some((b, w)) => rec.dispatch_indirect(
+                    &k.cluster_light_fill_bvh,
+                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.offsets, &self.list, &b.order, &b.nodes],
+                    &w,
+                    args,
+                    ARGS_ASSIGNMENT,
+                ),
+            }
         })?;
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
@@ -281,21 +301,6 @@ impl ClusterBuffers {
                 n,
             )
         })
-    }
-
-    /// Step 4 of `clustered-naive`: every light tested per unique cluster, as counts → scan of
-    /// the counts (offsets, and the light references they sum to) → fill.
-    fn record_naive_assignment(&self, gpu: &Gpu, rec: &mut Recorder<'_>, c: &FrameParams, bounds: &Buffer, lights: &Buffer) -> VkResult<()> {
-        let k = &gpu.kernels;
-        let args = &self.dispatch_args;
-        let p = IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, k.cluster_light_counts.kernel.invocations(), ARGS_ASSIGNMENT);
-        rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
-        rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], c, args, ARGS_ASSIGNMENT)?;
-        // Offsets of the unique clusters only (entries past them are never read).
-        let unique = Counted { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1 };
-        let scan = self.cluster_scan.as_ref().expect("the naive assignment's cluster scan");
-        scan.record_counted(gpu, rec, &self.counts, &self.offsets, &self.counters, unique, Some(COUNTER_LIGHT_REFS))?;
-        rec.dispatch_indirect(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], c, args, ARGS_ASSIGNMENT)
     }
 
     /// Reads the cluster data back (tests, statistics).
