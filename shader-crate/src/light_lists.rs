@@ -25,7 +25,8 @@ pub const LIGHTS_PER_ITERATION: u32 = 8;
 /// The most lights one invocation may loop over on llvmpipe (the host refuses more there):
 /// llvmpipe stops an invocation's loops after 65 535 iterations in all and silently drops the
 /// rest. Naive loops take `N/8` iterations, a BVH walk that meets every light `N/8 + N/32 +
-/// N/1024 + …` ≈ 0.157·N, the shading loop `N/16`: all under 65 535 for N ≤ 400 000.
+/// N/1024 + …` ≈ 0.157·N, the shading loop `N/16` (`N/8` over index ranges): all under 65 535
+/// for N ≤ 400 000.
 pub const MAX_LIGHTS_PER_INVOCATION_LLVMPIPE: u32 = 400_000;
 
 /// Lights `0..n` passing `test(centre, radius)`, in index order, [`LIGHTS_PER_ITERATION`] per loop

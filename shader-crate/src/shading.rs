@@ -116,6 +116,18 @@ pub const fn variant_effects<const SPECULAR: bool>(frame_effects: u32) -> u32 {
 pub trait LightList {
     fn start(&self) -> u32;
     fn step(&self, pos: u32) -> (u32, u32);
+    /// For lists whose entries can be read in any order (index ranges), the end position:
+    /// entries `start()..end` are read through [`at`](Self::at) ahead of shading
+    /// ([`shade_lights`]). `None` for lists that must be walked (linked lists).
+    #[inline]
+    fn end(&self) -> Option<u32> {
+        None
+    }
+    /// The light at position `pos < end` of a random-access list.
+    #[inline]
+    fn at(&self, pos: u32) -> u32 {
+        self.step(pos).0
+    }
 }
 
 /// Entries `first..first + count` of a list of light indices, entry `t` being `at(t)`: a range of
@@ -146,6 +158,16 @@ impl<F: Fn(u32) -> u32> LightList for IndexRange<F> {
             (NO_LIGHT, t)
         }
     }
+
+    #[inline]
+    fn end(&self) -> Option<u32> {
+        Some(self.end)
+    }
+
+    #[inline]
+    fn at(&self, t: u32) -> u32 {
+        (self.at)(t)
+    }
 }
 
 /// Lights `first..first + count` themselves: the brute-force list (every light). Its own type,
@@ -174,6 +196,16 @@ impl LightList for LightRange {
         } else {
             (NO_LIGHT, l)
         }
+    }
+
+    #[inline]
+    fn end(&self) -> Option<u32> {
+        Some(self.end)
+    }
+
+    #[inline]
+    fn at(&self, l: u32) -> u32 {
+        l
     }
 }
 
@@ -215,7 +247,9 @@ impl LightList for LinkedLights<'_> {
 /// compute kernels use to stay under llvmpipe's loop limiter with up to
 /// `light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE` lights. Otherwise one light per iteration:
 /// the Forward+ fragment shader (its frames are capped at `forward_plus::MAX_LIGHTS_LLVMPIPE` on
-/// llvmpipe), where lavapipe runs an unrolled body two orders of magnitude slower.
+/// llvmpipe), where lavapipe runs an unrolled body two orders of magnitude slower. Unrolled
+/// over a random-access list ([`LightList::end`]), the entries and lights are read in batches
+/// ahead of shading ([`shade_range`]).
 #[inline]
 pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     s: &Surface,
@@ -225,6 +259,11 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     sum: &mut Vec3,
 ) -> u32 {
     let effects = variant_effects::<SPECULAR>(frame_effects);
+    if UNROLLED {
+        if let Some(end) = list.end() {
+            return shade_range::<SPECULAR, L>(s, effects, lights, list, end, sum);
+        }
+    }
     let mut walked = 0;
     let mut pos = list.start();
     let mut more = true;
@@ -246,6 +285,53 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
         }
     }
     walked
+}
+
+/// Lights read ahead of shading in [`shade_range`]: the loads of [`RANGE_BATCH`] entries and of
+/// their lights are independent, so a GPU has them in flight at once instead of one list entry →
+/// light → shading chain after the other.
+pub const RANGE_BATCH: u32 = 4;
+
+/// [`shade_lights`] over a random-access list (entries `start()..end`): [`RANGE_BATCH`] entries
+/// and their lights are read first (positions past the end read the last entry again: the loads
+/// stay in range and are not shaded), then shaded in list order, so the sum is the same as one
+/// light after the other. Two batches per loop iteration: `N/8` iterations, under llvmpipe's
+/// loop limiter for `light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE`.
+#[inline]
+fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, end: u32, sum: &mut Vec3) -> u32 {
+    let first = list.start();
+    let mut t = first;
+    while t < end {
+        shade_batch::<SPECULAR, L>(s, effects, lights, list, t, end, sum);
+        t += RANGE_BATCH;
+        if t < end {
+            shade_batch::<SPECULAR, L>(s, effects, lights, list, t, end, sum);
+            t += RANGE_BATCH;
+        }
+    }
+    if end > first { end - first } else { 0 }
+}
+
+/// Entries `t..min(t + RANGE_BATCH, end)` of [`shade_range`] (`t < end`).
+#[inline]
+fn shade_batch<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, t: u32, end: u32, sum: &mut Vec3) {
+    let last = end - 1;
+    let i1 = if t + 1 < end { t + 1 } else { last };
+    let i2 = if t + 2 < end { t + 2 } else { last };
+    let i3 = if t + 3 < end { t + 3 } else { last };
+    let (l0, l1, l2, l3) = (list.at(t), list.at(i1), list.at(i2), list.at(i3));
+    let (a, b, c, d) = (lights[l0 as usize], lights[l1 as usize], lights[l2 as usize], lights[l3 as usize]);
+    let shade = |l: &PointLight| lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, l, effects);
+    *sum += shade(&a);
+    if t + 1 < end {
+        *sum += shade(&b);
+    }
+    if t + 2 < end {
+        *sum += shade(&c);
+    }
+    if t + 3 < end {
+        *sum += shade(&d);
+    }
 }
 
 /// One step of [`shade_lights`]: adds the radiance of the light at `pos` and advances `pos`;
