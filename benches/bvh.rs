@@ -53,6 +53,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         bvh_branching: 0,
         async_compute: false,
         sort: Default::default(),
+        fp_lists: Default::default(),
     }
 }
 

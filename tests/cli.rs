@@ -92,6 +92,26 @@ fn render_writes_png_and_stats() {
     assert!(stats["device"]["name"].as_str().unwrap().len() > 2);
 }
 
+/// `--fp-lists array` reaches Forward+ and its stats: the layout is named and the array's
+/// buffers are listed.
+#[test]
+fn render_forward_plus_with_array_lists() {
+    let dir = TempDir::new("cli-fp-lists");
+    let (png, json) = (dir.join("fp.png"), dir.join("fp.json"));
+    let (ok, _, err) = manylights(&[
+        "render", "--scene", "city", "--lights", "300", "--width", "64", "--height", "36", "--frames", "1",
+        "--technique", "forward-plus", "--fp-lists", "array", "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
+    ]);
+    assert!(ok, "render failed:\n{err}");
+    let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(stats["fp_lists"], "array");
+    for buffer in ["tile light ranges", "tile light indices"] {
+        assert!(stats["bytes"]["buffers"][buffer].as_u64().unwrap_or(0) > 0, "buffer {buffer:?}: {}", stats["bytes"]["buffers"]);
+    }
+    assert!(stats["bytes"]["buffers"].get("light list nodes").is_none(), "no linked-list nodes: {}", stats["bytes"]["buffers"]);
+    assert!(stats["clusters"]["light_references"].as_u64().unwrap() > 0);
+}
+
 #[test]
 fn render_bad_input_is_a_one_line_error_with_status_2() {
     let dir = TempDir::new("cli-bad-render");
@@ -129,6 +149,7 @@ fn render_bad_input_is_a_one_line_error_with_status_2() {
         (vec!["--frames", "1000000000"], vec!["--frames", "1000000000"]),
         (vec!["--time", "nan"], vec!["--time NaN"]),
         (vec!["--normal-precision", "f64"], vec!["'f64'", "oct8"]),
+        (vec!["--technique", "forward-plus", "--fp-lists", "ring"], vec!["'ring'", "linked", "array"]),
         (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
         (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
     ];

@@ -3,7 +3,8 @@
 //! technique must shade with the plain inverse square cut at each light's radius, not with Karis'
 //! window: its image differs from the window image on a meaningful share of the pixels, and both
 //! images equal a CPU shading of the read-back G-buffer (every light, `lighting::shade` with the
-//! frame's effect bits) within 1/255 — for the `_diffuse` and the `_specular` shading variants.
+//! frame's effect bits) within 1/255 — for the `_diffuse` and the `_specular` shading variants
+//! (Forward+ with both layouts of its tile lists).
 mod common;
 use host::gpu::Gpu;
 use host::render::{self, Frame, Readback, Settings, Technique};
@@ -51,6 +52,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         bvh_branching: 0,
         async_compute: true,
         sort: Default::default(),
+        fp_lists: Default::default(),
         width: WIDTH,
         height: HEIGHT,
         tile_size: 16,
@@ -109,14 +111,16 @@ fn assert_cut_reaches_every_technique(gpu: &Gpu, specular: f32) {
     let geometry = cpu_cut.iter().filter(|&&p| p != BACKGROUND_RGBA8).count();
     let expected = differing(&cpu_cut, &cpu_window);
     assert!(expected * 5 > geometry, "specular {specular}: the falloffs should differ on a fifth of the {geometry} geometry pixels, they differ on {expected}");
-    for &t in Technique::ALL {
-        let window = frame(gpu, &scene, &lights, 0, &settings(t, false)).pixels;
-        let cut = frame(gpu, &scene, &lights, EFFECT_INVERSE_SQUARE_CUT, &settings(t, false)).pixels;
+    for (t, fp_lists) in common::render::runs(Technique::ALL) {
+        let s = Settings { fp_lists, ..settings(t, false) };
+        let t = common::render::label((t, fp_lists));
+        let window = frame(gpu, &scene, &lights, 0, &s).pixels;
+        let cut = frame(gpu, &scene, &lights, EFFECT_INVERSE_SQUARE_CUT, &s).pixels;
         let changed = differing(&cut, &window);
-        assert!(changed * 5 > geometry, "{t:?}, specular {specular}: the inverse-square cut changes {changed} of {geometry} pixels (CPU: {expected})");
+        assert!(changed * 5 > geometry, "{t}, specular {specular}: the inverse-square cut changes {changed} of {geometry} pixels (CPU: {expected})");
         for (what, gpu_image, cpu) in [("cut", &cut, &cpu_cut), ("window", &window, &cpu_window)] {
             let bad: Vec<(usize, u32, u32)> = (0..cpu.len()).filter(|&i| channel_diff(gpu_image[i], cpu[i]) > 1).map(|i| (i, gpu_image[i], cpu[i])).take(5).collect();
-            assert!(bad.is_empty(), "{t:?}, specular {specular}, {what}: pixels differ from the CPU shading by more than 1/255 (pixel, GPU, CPU): {bad:x?}");
+            assert!(bad.is_empty(), "{t}, specular {specular}, {what}: pixels differ from the CPU shading by more than 1/255 (pixel, GPU, CPU): {bad:x?}");
         }
     }
     common::assert_clean(gpu);

@@ -1,5 +1,6 @@
 //! Hard cases on every technique (`Technique::ALL`, so a new technique is covered
-//! without a change), on the local device (lavapipe in CI) with validation on. Each image equals
+//! without a change; Forward+ with both layouts of its tile lists), on the local device
+//! (lavapipe in CI) with validation on. Each image equals
 //! the brute-force `deferred` reference within 1/255 per channel:
 //! * the hard light cases (camera inside a light, lights behind the camera, near/far straddle,
 //!   radii 0, huge and 1e30, coincident lights, no light) and a 7680×4320 frame;
@@ -9,11 +10,12 @@
 //! * intensities up to 1e30 and sums past `f32::MAX` (finite, clamped output, equal to a CPU
 //!   shading of the read-back G-buffer; `shaders::lighting`, "HDR overflow").
 mod common;
-use common::compare::{assert_every_technique_equals_deferred, assert_techniques_match, cpu_shaded, geometry_pixels, TOLERANCE};
+use common::compare::{assert_every_technique_equals_deferred, assert_runs_match, assert_techniques_match, cpu_shaded, geometry_pixels, TOLERANCE};
 use common::pixels::{lit, worst_channel};
-use common::render::{city, frame, settings};
+use common::render::{city, frame, runs, settings, Run};
 use common::scenes::{camera_frame, camera_in_box, degenerate_triangles, hard_light_cases, light, representable_at, translated, wall_through_near_plane, with_mesh};
 use glam::DVec3;
+use host::render::forward_plus::TileLists;
 use host::render::{self, Frame, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::{lights, Scene};
@@ -74,13 +76,16 @@ fn street_lights(scene: &Scene, n: usize) -> Vec<PointLight> {
 /// Cost on lavapipe with 2 cores, one frame at a time: the per-pixel passes dominate — deferred
 /// takes 11 s of CPU without lights, 23 s with 8 lights over the avenue and 67 s with 64 uniform
 /// lights; clustered-naive 50 s and clustered-aabb 42 s with those 8; 1.3–1.7 GB of host memory
-/// at the peak. Forward+ is the exception: on lavapipe any frame with a light costs it about 50
-/// CPU seconds per 1000 pixels of width (12 s at 128×72, 55 s at 480×270, 250 s at 1920×1080,
-/// whether or not a tile lists the light; 1.7 s at 1080p without lights), so an 8K frame would
-/// take over 15 CPU minutes. On lavapipe it therefore renders the 8K frame without lights
-/// (pre-pass, culling, winners and the EQUAL forward pass, against a light-less deferred frame);
-/// on other devices with the lights like every technique. The test takes 165 s (290 CPU s, 1.8 GB
-/// peak) on lavapipe with 2 cores.
+/// at the peak. Forward+ with linked lists is the exception: on lavapipe any frame with a light
+/// costs it about 50 CPU seconds per 1000 pixels of width (12 s at 128×72, 55 s at 480×270, 250 s
+/// at 1920×1080, whether or not a tile lists the light; 1.7 s at 1080p without lights), so an 8K
+/// frame would take over 15 CPU minutes. On lavapipe that layout therefore renders the 8K frame
+/// without lights (pre-pass, culling, winners and the EQUAL forward pass, against a light-less
+/// deferred frame); on other devices with the lights like every technique. With arrays
+/// (`--fp-lists array`) lavapipe renders a lit frame in about 2 s at 480×270 and 23 s at 8K, so
+/// that layout renders the lit 8K frame everywhere. On lavapipe with 2 cores the test took
+/// 360–405 s (1.6 GB peak): the reference 26–29 s per frame, the clustered and tiled techniques
+/// 34–70 s each, Forward+ 18 s with arrays (lit) and 11 s with linked lists (unlit).
 #[test]
 fn frames_8k_on_every_technique() {
     let gpu = common::gpu();
@@ -93,10 +98,10 @@ fn frames_8k_on_every_technique() {
         assert_eq!(reference.pixels.len(), 7680 * 4320);
         assert!(background_free(&reference) * 2 > reference.pixels.len(), "8K: the frame should show the city");
         assert!(l.is_empty() || lit(&reference.pixels) * 10 > reference.pixels.len(), "8K: the lights should light the street");
-        // With lights: every technique but forward+ on lavapipe; without: forward+ on lavapipe.
-        let run = |t: Technique| t != Technique::Deferred && (l.is_empty() == (llvmpipe && t == Technique::ForwardPlus));
-        for &t in Technique::ALL.iter().filter(|&&t| run(t)) {
-            assert_techniques_match(&gpu, &reference.pixels, &scene, &l, &Settings { tile_size: tile_8k(t), ..s.clone() }, &[t], &format!("8K, {} lights", l.len()));
+        // With lights: every run but forward+ with linked lists on lavapipe; without: that one.
+        let unlit_only = |r: Run| llvmpipe && r == (Technique::ForwardPlus, TileLists::Linked);
+        for run in runs(Technique::ALL).into_iter().filter(|&r| r.0 != Technique::Deferred && l.is_empty() == unlit_only(r)) {
+            assert_runs_match(&gpu, &reference.pixels, &scene, &l, &Settings { tile_size: tile_8k(run.0), ..s.clone() }, &[run], &format!("8K, {} lights", l.len()));
         }
         if !llvmpipe {
             break;

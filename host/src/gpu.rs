@@ -50,7 +50,8 @@ pub struct Kernels {
     pub aabb_compact: ComputePipeline<FrameParams>,
     pub aabb_assign: ComputePipeline<FrameParams>,
     pub shade_aabb: [ComputePipeline<FrameParams>; 2],
-    pub forward_plus_cull: ComputePipeline<TiledParams>,
+    /// Forward+ culling into per-tile lists `[linked, array]` (`render::forward_plus::TileLists`).
+    pub forward_plus_cull: [ComputePipeline<TiledParams>; 2],
 }
 
 impl Kernels {
@@ -107,7 +108,10 @@ impl Kernels {
                 ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_DIFFUSE)?,
                 ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_SPECULAR)?,
             ],
-            forward_plus_cull: ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL)?,
+            forward_plus_cull: [
+                ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL[0])?,
+                ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL[1])?,
+            ],
         })
     }
 }
@@ -134,8 +138,9 @@ pub struct RasterPipelines {
     pub gbuffer: [[GraphicsPipeline<DrawParams>; 3]; 2],
     /// Forward+ depth pre-pass `[opaque, alpha-tested]`.
     pub forward_depth: [GraphicsPipeline<ForwardParams>; 2],
-    /// Forward+ shading `[plain, textured, alpha-tested]`.
-    pub forward_shade: [GraphicsPipeline<ForwardParams>; 3],
+    /// Forward+ shading `[list layout][plain, textured, alpha-tested]` (layouts `[linked, array]`,
+    /// `render::forward_plus::TileLists`).
+    pub forward_shade: [[GraphicsPipeline<ForwardParams>; 3]; 2],
 }
 
 impl RasterPipelines {
@@ -148,15 +153,14 @@ impl RasterPipelines {
         };
         let colour = [FORWARD_COLOUR_FORMAT];
         let forward = |h: RasterKernel<ForwardParams>, depth| GraphicsPipeline::new(ctx, &module, h.fragment, h, &colour, depth);
-        let (d, s) = (&kernels::FORWARD_DEPTH, &kernels::FORWARD_SHADE);
+        let d = &kernels::FORWARD_DEPTH;
+        let shade = |s: &[RasterKernel<ForwardParams>; 3]| -> VkResult<[GraphicsPipeline<ForwardParams>; 3]> {
+            Ok([forward(s[0], DepthTest::EqualReadOnly)?, forward(s[1], DepthTest::EqualReadOnly)?, forward(s[2], DepthTest::EqualReadOnly)?])
+        };
         Ok(Self {
             gbuffer: [gbuffer(0, &kernels::GBUFFER)?, gbuffer(1, &kernels::GBUFFER_F32)?],
             forward_depth: [forward(d[0], DepthTest::NearestWrites)?, forward(d[1], DepthTest::NearestWrites)?],
-            forward_shade: [
-                forward(s[0], DepthTest::EqualReadOnly)?,
-                forward(s[1], DepthTest::EqualReadOnly)?,
-                forward(s[2], DepthTest::EqualReadOnly)?,
-            ],
+            forward_shade: [shade(&kernels::FORWARD_SHADE[0])?, shade(&kernels::FORWARD_SHADE[1])?],
         })
     }
 }

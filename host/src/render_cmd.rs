@@ -61,6 +61,11 @@ pub struct RenderArgs {
     /// GPU sort of the lights' Morton keys for `clustered-bvh`.
     #[arg(long, value_enum, default_value_t = crate::render::sort::SortKind::Radix)]
     pub sort: crate::render::sort::SortKind,
+    /// Layout of the per-tile light lists for `forward-plus`: `linked` lists built with atomics
+    /// (each fragment walks its tile's list), or contiguous `array`s the culling writes (each
+    /// fragment reads its tile's offset, count and index range).
+    #[arg(long, value_enum, default_value_t = crate::render::forward_plus::TileLists::Linked)]
+    pub fp_lists: crate::render::forward_plus::TileLists,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -150,6 +155,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         bvh_branching: a.bvh_branching.unwrap_or(0),
         async_compute: !a.no_async_compute,
         sort: a.sort,
+        fp_lists: a.fp_lists,
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

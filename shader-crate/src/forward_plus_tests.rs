@@ -1,13 +1,16 @@
 //! CPU tests of `forward_plus`: the emulated culling (widths 4…64) builds, per tile, a linked list
 //! holding exactly the lights the tile's frustum test keeps (each once) — every light touching a
 //! pixel among them — and with too few nodes links nothing past the capacity while the counter
-//! still reaches the frame's need.
+//! still reaches the frame's need. The array variant writes, per tile, exactly those lights in
+//! index order into one range of its own (the ranges tile the counter's span without overlap),
+//! also for tiles longer than the staging list, and with too small a buffer writes nothing past
+//! the capacity while the counter still reaches the need.
 use super::*;
 use crate::coop::cpu::{run_workgroups, Emulation};
 use crate::lighting::light_touches;
 use crate::light_lists::ListSink;
 use crate::shading::NO_NODE;
-use crate::test_support::{frame_params, gbuffer, test_lights, Rng};
+use crate::test_support::{frame_params, gbuffer, test_lights, GBuffer, Rng};
 use crate::tile_cull::{depth_cell, depth_cells, keep_light, tile_frustum, tile_rect, DepthCells, TileFrustum, MODE_TILED_25D, TILED_WORKGROUP};
 use crate::reconstruct;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -34,23 +37,50 @@ fn tile_test(g: &ClusterGrid, depth: &[f32], tx: u32, ty: u32) -> Option<(TileFr
     Some((tile_frustum(g, tx, ty, lo, hi), cells, d.iter().fold(0, |m, &x| m | 1u32 << depth_cell(&cells, x))))
 }
 
+/// The lights each tile keeps, in index order, by the CPU tests (the frame's need).
+fn expected_lists(g: &ClusterGrid, depth: &[f32], lights: &[PointLight], mode: u32) -> Vec<Vec<u32>> {
+    (0..g.tiles_x * g.tiles_y)
+        .map(|t| match tile_test(g, depth, t % g.tiles_x, t / g.tiles_x) {
+            None => vec![],
+            Some((f, cells, mask)) => (0..lights.len() as u32).filter(|&l| keep_light(&f, &cells, mask, mode, &lights[l as usize])).collect(),
+        })
+        .collect()
+}
+
+/// A 40×24 frame of 16 px tiles, its synthetic G-buffer, and `n` lights plus `coincident` ones
+/// at one point.
+struct Fixture {
+    g: ClusterGrid,
+    gb: GBuffer,
+    lights: Vec<PointLight>,
+}
+
+fn fixture(seed: u64, n: usize, coincident: usize) -> Fixture {
+    let g = ClusterGrid::new(40, 24, 16, 0.1, 1000.0, core::f32::consts::FRAC_PI_3).unwrap();
+    let mut rng = Rng(seed);
+    let gb = gbuffer(&g, &mut rng);
+    let lights = test_lights(&g, &mut rng, n, coincident);
+    Fixture { g, gb, lights }
+}
+
+impl Fixture {
+    /// The culling parameters for `mode`, each tile's expected list ([`expected_lists`]) and the
+    /// frame's need (their total).
+    fn expect(&self, mode: u32) -> (TiledParams, Vec<Vec<u32>>, u32) {
+        let p = TiledParams { frame: frame_params(self.g, self.lights.len() as u32), mode, _pad: [0; 3] };
+        let expected = expected_lists(&self.g, &self.gb.depth, &self.lights, mode);
+        let need = expected.iter().map(|e| e.len() as u32).sum();
+        (p, expected, need)
+    }
+}
+
 #[test]
 fn emulated_lists_hold_exactly_the_kept_lights() {
-    let g = ClusterGrid::new(40, 24, 16, 0.1, 1000.0, core::f32::consts::FRAC_PI_3).unwrap();
-    let mut rng = Rng(17);
-    let gb = gbuffer(&g, &mut rng);
-    let lights = test_lights(&g, &mut rng, 400, 700);
+    let f = fixture(17, 400, 700);
+    let (g, gb, lights) = (f.g, &f.gb, &f.lights);
     let tiles = g.tiles_x * g.tiles_y;
     for (width, mode) in [(4, MODE_TILED_25D), (8, 0), (16, MODE_TILED_25D), (32, 0), (64, MODE_TILED_25D)] {
-        let p = TiledParams { frame: frame_params(g, lights.len() as u32), mode, _pad: [0; 3] };
-        // The frame's need, from the CPU tests.
-        let expected: Vec<Vec<u32>> = (0..tiles)
-            .map(|t| match tile_test(&g, &gb.depth, t % g.tiles_x, t / g.tiles_x) {
-                None => vec![],
-                Some((f, cells, mask)) => (0..lights.len() as u32).filter(|&l| keep_light(&f, &cells, mask, mode, &lights[l as usize])).collect(),
-            })
-            .collect();
-        let need: u32 = expected.iter().map(|e| e.len() as u32).sum();
+        let (p, expected, need) = f.expect(mode);
         for capacity in [need, need / 3] {
             let heads: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(NO_NODE)).collect();
             let nodes: Vec<AtomicU32> = (0..2 * need).map(|_| AtomicU32::new(0xdead)).collect();
@@ -58,7 +88,7 @@ fn emulated_lists_hold_exactly_the_kept_lights() {
             let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: TILE_CULL_SHARED_WORDS as usize };
             run_workgroups(emu, tiles, |t, c, s| {
                 let (mut ctr, mut head, mut sink) = (&counter, &heads[t as usize], Nodes(&nodes));
-                cull_tile(c, s, &p, t % g.tiles_x, t / g.tiles_x, &gb.depth, &lights, &mut ctr, &mut head, &mut sink, capacity)
+                cull_tile(c, s, &p, t % g.tiles_x, t / g.tiles_x, &gb.depth, lights, &mut ctr, &mut head, &mut sink, capacity)
             });
             assert_eq!(counter.load(Ordering::Relaxed), need, "width {width}: the counter ends at the nodes needed");
             let mut linked = 0;
@@ -93,5 +123,68 @@ fn emulated_lists_hold_exactly_the_kept_lights() {
                 }
             }
         }
+    }
+}
+
+/// The array variant: per tile exactly the kept lights, in index order, in a range of its own;
+/// tiles longer than the staging list (1500 coincident lights) take the second pass; with a third
+/// of the need as capacity nothing lands past it, every entry below it is written, and the
+/// counter still ends at the need.
+#[test]
+fn emulated_arrays_hold_exactly_the_kept_lights_in_index_order() {
+    let f = fixture(23, 400, 1500);
+    let (g, gb, lights) = (f.g, &f.gb, &f.lights);
+    let tiles = g.tiles_x * g.tiles_y;
+    for (width, mode) in [(4, 0), (8, MODE_TILED_25D), (16, 0), (32, MODE_TILED_25D), (64, 0)] {
+        let (p, expected, need) = f.expect(mode);
+        assert!(expected.iter().any(|e| e.len() as u32 > STAGE_CAPACITY), "some tile should hold more lights than the staging list");
+        for capacity in [need, need / 3] {
+            const UNWRITTEN: u32 = 0xdead;
+            let indices: Vec<AtomicU32> = (0..need).map(|_| AtomicU32::new(UNWRITTEN)).collect();
+            let counter = AtomicU32::new(0);
+            let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: FP_ARRAY_SHARED_WORDS };
+            let ranges = run_workgroups(emu, tiles, |t, c, s| {
+                let (mut ctr, mut sink) = (&counter, Nodes(&indices));
+                cull_tile_array(c, s, &p, t % g.tiles_x, t / g.tiles_x, &gb.depth, lights, &mut ctr, &mut sink, capacity)
+            });
+            assert_eq!(counter.load(Ordering::Relaxed), need, "width {width}: the counter ends at the references needed");
+            let mut covered = vec![false; need as usize];
+            for t in 0..tiles as usize {
+                let group = &ranges[t * TILED_WORKGROUP as usize..(t + 1) * TILED_WORKGROUP as usize];
+                let r = group[0];
+                assert!(group.iter().all(|&x| x == r), "width {width}, tile {t}: every invocation returns the tile's range");
+                assert_eq!(r.count as usize, expected[t].len(), "width {width}, tile {t}: count");
+                for (k, &light) in expected[t].iter().enumerate() {
+                    let i = (r.offset + k as u32) as usize;
+                    assert!(!covered[i], "width {width}, tile {t}: entry {i} belongs to two tiles");
+                    covered[i] = true;
+                    let got = indices[i].load(Ordering::Relaxed);
+                    if (i as u32) < capacity {
+                        assert_eq!(got, light, "width {width}, tile {t}: entry {k} of its range (index order)");
+                    } else {
+                        assert_eq!(got, UNWRITTEN, "width {width}, tile {t}: entry {i} written past the capacity {capacity}");
+                    }
+                }
+            }
+            assert!(covered.iter().all(|&c| c), "width {width}: the ranges tile the counter's span");
+        }
+    }
+}
+
+/// A frame without lights, and tiles of sky only: every range is empty and no atomic is spent.
+#[test]
+fn emulated_arrays_of_empty_tiles_are_empty() {
+    let Fixture { g, gb, lights } = fixture(5, 50, 0);
+    let sky = vec![0.0f32; gb.depth.len()];
+    for (depth, n) in [(&gb.depth, 0), (&sky, lights.len() as u32)] {
+        let p = TiledParams { frame: frame_params(g, n), mode: 0, _pad: [0; 3] };
+        let counter = AtomicU32::new(0);
+        let emu = Emulation { width: 8, workgroup_size: TILED_WORKGROUP, shared_words: FP_ARRAY_SHARED_WORDS };
+        let ranges = run_workgroups(emu, g.tiles_x * g.tiles_y, |t, c, s| {
+            let (mut ctr, mut sink) = (&counter, Nodes(&[]));
+            cull_tile_array(c, s, &p, t % g.tiles_x, t / g.tiles_x, depth, &lights, &mut ctr, &mut sink, 0)
+        });
+        assert!(ranges.iter().all(|r| r.count == 0), "{n} lights: every tile is empty");
+        assert_eq!(counter.load(Ordering::Relaxed), 0, "{n} lights: nothing reserved");
     }
 }

@@ -113,8 +113,12 @@ pub const AABB_ASSIGN: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_a
 pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_diffuse", 12);
 pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 12);
 
-// Forward+ (`forward_plus.rs`): tiled culling into per-tile linked lists.
-pub const FORWARD_PLUS_CULL: Kernel<TiledParams> = Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
+// Forward+ (`forward_plus.rs`): tiled culling into per-tile lists, `[linked, array]` (the list
+// layouts of `render --fp-lists`).
+pub const FORWARD_PLUS_CULL: [Kernel<TiledParams>; 2] = [
+    Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
+    Kernel::new("forward_plus::forward_plus_cull_array", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
+];
 
 // Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): block sort and merge give each subgroup
 // a block / piece (cooperative); the splitters are one invocation per sample.
@@ -166,7 +170,8 @@ pub const ALL: &[Kernel<()>] = &[
     AABB_ASSIGN.erased(),
     SHADE_AABB_DIFFUSE.erased(),
     SHADE_AABB_SPECULAR.erased(),
-    FORWARD_PLUS_CULL.erased(),
+    FORWARD_PLUS_CULL[0].erased(),
+    FORWARD_PLUS_CULL[1].erased(),
     BITONIC_BLOCK_SORT.erased(),
     BITONIC_SPLITTERS.erased(),
     BITONIC_MERGE.erased(),
@@ -224,14 +229,22 @@ pub const FORWARD_DEPTH: [RasterKernel<ForwardParams>; 2] = [
     RasterKernel::new("raster_forward::depth_vs", "raster_forward::depth_fs", 0, 0),
     RasterKernel::new("raster_forward::depth_vs_uv", "raster_forward::depth_fs_masked", 0, 2),
 ];
-/// Storage buffers of the forward pass's fragment stage: tile heads, nodes, lights, materials,
-/// counters, winning draws.
+/// Storage buffers of the forward pass's fragment stage: the tile lists (heads and nodes, or
+/// ranges and indices), lights, materials, counters, winning draws.
 pub const FORWARD_FRAGMENT_BUFFERS: u32 = 6;
-/// Forward+ shading pass `[plain, textured, alpha-tested]` (as [`GBUFFER`]).
-pub const FORWARD_SHADE: [RasterKernel<ForwardParams>; 3] = [
-    RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs", FORWARD_FRAGMENT_BUFFERS, 0),
-    RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured", FORWARD_FRAGMENT_BUFFERS, 1),
-    RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked", FORWARD_FRAGMENT_BUFFERS, 2),
+/// Forward+ shading pass `[list layout][plain, textured, alpha-tested]` (layouts `[linked,
+/// array]` as [`FORWARD_PLUS_CULL`]; variants as [`GBUFFER`]).
+pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs", FORWARD_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured", FORWARD_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked", FORWARD_FRAGMENT_BUFFERS, 2),
+    ],
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs_array", FORWARD_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured_array", FORWARD_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked_array", FORWARD_FRAGMENT_BUFFERS, 2),
+    ],
 ];
 
 /// Every vertex entry point of the raster module (from the handles above).
@@ -246,7 +259,10 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     GBUFFER_F32[2].fragment,
     FORWARD_DEPTH[0].fragment,
     FORWARD_DEPTH[1].fragment,
-    FORWARD_SHADE[0].fragment,
-    FORWARD_SHADE[1].fragment,
-    FORWARD_SHADE[2].fragment,
+    FORWARD_SHADE[0][0].fragment,
+    FORWARD_SHADE[0][1].fragment,
+    FORWARD_SHADE[0][2].fragment,
+    FORWARD_SHADE[1][0].fragment,
+    FORWARD_SHADE[1][1].fragment,
+    FORWARD_SHADE[1][2].fragment,
 ];

@@ -1,5 +1,7 @@
 //! Raster shaders of Forward+ ([`crate::forward_plus`] has the algorithm): the depth pre-pass and
-//! the forward shading pass. Every vertex shader computes its position with the one function
+//! the forward shading pass, the latter in two variants of its tile lists (`render --fp-lists`):
+//! `forward_fs*` walk the linked lists, `forward_fs*_array` read `(offset, count)` and a
+//! contiguous index range. Every vertex shader computes its position with the one function
 //! [`clip_position`], and the forward pass reuses the G-buffer vertex shaders ([`crate::raster`]),
 //! so the depths agree with the pre-pass (the forward pass tests EQUAL) and with the G-buffer of
 //! the deferred techniques (the tests compare the images).
@@ -14,7 +16,7 @@ use crate::layout::*;
 use crate::octahedral::{self, Precision};
 use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
 use crate::lighting;
-use crate::shading::{self, Surface, BACKGROUND_RGBA8};
+use crate::shading::{self, variant_entries, LightList, Surface, BACKGROUND_RGBA8};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
 
@@ -72,26 +74,42 @@ fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
     }
 }
 
-/// The forward shading of one fragment (module docs): the sum over its tile's list. Views: the
-/// shaded image and the heatmap (lights in the tile's list); the other debug views show the shaded
-/// image.
+/// The sum over `list` at `surface` and its output colour: the light loop of every technique,
+/// one light per iteration, with the variant the frame-uniform specular bit picks (no specular
+/// code for scenes without specular materials).
+#[inline]
+fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L) -> u32 {
+    let mut sum = Vec3::ZERO;
+    let count = if f.effects & EFFECT_SPECULAR != 0 {
+        shading::shade_lights::<true, false, _>(surface, f.effects, lights, list, &mut sum)
+    } else {
+        shading::shade_lights::<false, false, _>(surface, f.effects, lights, list, &mut sum)
+    };
+    lighting::encode_srgb8(shading::lit_colour(f, sum, count))
+}
+
+/// The forward shading of one fragment (module docs): the sum over its tile's list. `ARRAY`
+/// picks the list layout (`render --fp-lists`): `false` linked lists (`tiles` = heads, `entries`
+/// = nodes), `true` arrays (`tiles` = `(offset, count)` pairs, `entries` = light indices). Views:
+/// the shaded image and the heatmap (lights in the tile's list); the other debug views show the
+/// shaded image.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub fn forward_colour(
+pub fn forward_colour<const ARRAY: bool>(
     frag: Vec4,
     in_normal: Vec3,
     front_facing: bool,
     texel: Vec3,
     p: &ForwardParams,
-    heads: &[u32],
-    nodes: &[u32],
+    tiles: &[u32],
+    entries: &[u32],
     lights: &[PointLight],
     materials: &[MaterialGpu],
     counters: &[u32],
 ) -> u32 {
     let f = &p.frame;
     let g = &f.grid;
-    // An overflowed frame is re-run with more nodes: draw nothing from a partial list.
+    // An overflowed frame is re-run with a larger buffer: draw nothing from a partial list.
     if counters[0] > f.light_capacity {
         return BACKGROUND_RGBA8;
     }
@@ -109,85 +127,84 @@ pub fn forward_colour(
         roughness: mat.roughness,
     };
     let (tx, ty) = g.tile_of_pixel(px, py);
-    let tile_list = shading::linked_lights(heads[(ty * g.tiles_x + tx) as usize], nodes);
-    let mut sum = Vec3::ZERO;
-    // The frame-uniform specular bit picks the compiled variant (no specular code for scenes
-    // without specular materials).
-    let count = if f.effects & EFFECT_SPECULAR != 0 {
-        shading::shade_lights::<true, false, _>(&surface, f.effects, lights, &tile_list, &mut sum)
+    let tile = (ty * g.tiles_x + tx) as usize;
+    if ARRAY {
+        shade_list(f, &surface, lights, &shading::index_range(tiles[2 * tile], tiles[2 * tile + 1], |t| entries[t as usize]))
     } else {
-        shading::shade_lights::<false, false, _>(&surface, f.effects, lights, &tile_list, &mut sum)
-    };
-    lighting::encode_srgb8(shading::lit_colour(f, sum, count))
-}
-
-/// Forward pass of untextured draws.
-#[spirv(fragment)]
-#[allow(clippy::too_many_arguments)]
-pub fn forward_fs(
-    in_normal: Vec3,
-    #[spirv(front_facing)] front_facing: bool,
-    #[spirv(frag_coord)] frag: Vec4,
-    #[spirv(push_constant)] p: &ForwardParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
-    out_colour: &mut u32,
-) {
-    demote_unless_winner(frag, p, winners);
-    *out_colour = forward_colour(frag, in_normal, front_facing, Vec3::ONE, p, heads, nodes, lights, materials, counters);
-}
-
-/// Forward pass of textured draws.
-#[spirv(fragment)]
-#[allow(clippy::too_many_arguments)]
-pub fn forward_fs_textured(
-    in_normal: Vec3,
-    in_uv: Vec2,
-    #[spirv(front_facing)] front_facing: bool,
-    #[spirv(frag_coord)] frag: Vec4,
-    #[spirv(push_constant)] p: &ForwardParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
-    #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
-    out_colour: &mut u32,
-) {
-    demote_unless_winner(frag, p, winners);
-    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-    *out_colour = forward_colour(frag, in_normal, front_facing, texel, p, heads, nodes, lights, materials, counters);
-}
-
-/// Forward pass of alpha-tested draws (cut-out fragments also fail the EQUAL test; demoted all
-/// the same, as in the pre-pass).
-#[spirv(fragment)]
-#[allow(clippy::too_many_arguments)]
-pub fn forward_fs_masked(
-    in_normal: Vec3,
-    in_uv: Vec2,
-    #[spirv(front_facing)] front_facing: bool,
-    #[spirv(frag_coord)] frag: Vec4,
-    #[spirv(push_constant)] p: &ForwardParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] heads: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] nodes: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
-    #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
-    #[spirv(descriptor_set = 0, binding = 11)] mask_map: &Texture2d,
-    out_colour: &mut u32,
-) {
-    demote_unless_winner(frag, p, winners);
-    if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
-        spirv_std::arch::demote_to_helper_invocation();
+        shade_list(f, &surface, lights, &shading::linked_lights(tiles[tile], entries))
     }
-    let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-    *out_colour = forward_colour(frag, in_normal, front_facing, texel, p, heads, nodes, lights, materials, counters);
+}
+
+variant_entries! {
+    [fragment] forward_fs: "over the linked lists (`--fp-lists linked`).", forward_fs_array: "over the arrays (`--fp-lists array`).";
+    /// Forward pass of untextured draws.
+    fn forward_fs_impl<const ARRAY: bool>(
+        in_normal: Vec3,
+        #[spirv(front_facing)] front_facing: bool,
+        #[spirv(frag_coord)] frag: Vec4,
+        #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+        out_colour: &mut u32,
+    ) {
+        demote_unless_winner(frag, p, winners);
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, Vec3::ONE, p, tiles, entries, lights, materials, counters);
+    }
+}
+
+variant_entries! {
+    [fragment] forward_fs_textured: "over the linked lists (`--fp-lists linked`).", forward_fs_textured_array: "over the arrays (`--fp-lists array`).";
+    /// Forward pass of textured draws.
+    fn forward_fs_textured_impl<const ARRAY: bool>(
+        in_normal: Vec3,
+        in_uv: Vec2,
+        #[spirv(front_facing)] front_facing: bool,
+        #[spirv(frag_coord)] frag: Vec4,
+        #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+        #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
+        out_colour: &mut u32,
+    ) {
+        demote_unless_winner(frag, p, winners);
+        let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters);
+    }
+}
+
+variant_entries! {
+    [fragment] forward_fs_masked: "over the linked lists (`--fp-lists linked`).", forward_fs_masked_array: "over the arrays (`--fp-lists array`).";
+    /// Forward pass of alpha-tested draws (cut-out fragments also fail the EQUAL test; demoted
+    /// all the same, as in the pre-pass).
+    fn forward_fs_masked_impl<const ARRAY: bool>(
+        in_normal: Vec3,
+        in_uv: Vec2,
+        #[spirv(front_facing)] front_facing: bool,
+        #[spirv(frag_coord)] frag: Vec4,
+        #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+        #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
+        #[spirv(descriptor_set = 0, binding = 11)] mask_map: &Texture2d,
+        out_colour: &mut u32,
+    ) {
+        demote_unless_winner(frag, p, winners);
+        if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
+            spirv_std::arch::demote_to_helper_invocation();
+        }
+        let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters);
+    }
 }

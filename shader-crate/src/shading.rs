@@ -9,8 +9,8 @@
 //!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
 //!   albedo and material ([`gbuffer_albedo`]).
 //! * **Light loop** — [`shade_lights`]: the sum of [`lighting::shade_variant`] over a
-//!   [`LightList`] (a range of indices in a buffer or workgroup memory, [`light_range`]: all
-//!   lights, or a Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration
+//!   [`LightList`] (a range of indices in a buffer or workgroup memory — a cluster's, a tiled
+//!   tile's or a Forward+ tile's array —, [`light_range`]: all lights, or a Forward+ linked list), [`SHADE_LIGHTS_PER_ITERATION`] lights per loop iteration
 //!   in the compute kernels, one in the Forward+ fragment shader. The effect bits it evaluates
 //!   come from [`variant_effects`], the one place where a kernel's compile-time specular variant
 //!   meets `FrameParams::effects`: every other bit (the falloff of `EFFECT_INVERSE_SQUARE_CUT`)
@@ -18,7 +18,9 @@
 //!   G-buffer pixel (the clustered techniques).
 //! * **Output** — [`BACKGROUND_RGBA8`], [`lit_colour`] (tonemap or heatmap), [`output_colour`]
 //!   (also the debug views that need the slice bounds), packed as sRGB8.
-//! * **Entries** — `specular_entries!` declares a kernel's `_diffuse` / `_specular` pair.
+//! * **Entries** — `variant_entries!` declares a shader's two variants of one compile-time flag:
+//!   `specular_entries!` a kernel's `_diffuse` / `_specular` pair, the Forward+ fragment shaders
+//!   their linked-list / array pair.
 //!
 //! **Variants.** A scene without specular materials runs the `_diffuse` kernels: with
 //! `SPECULAR = false` the specular lobe is not in the compiled code (`shade_variant`), so such a
@@ -398,15 +400,15 @@ pub fn output_colour(p: &FrameParams, bounds: &[f32], i: u32, s: &Surface, radia
     lighting::encode_srgb8(rgb)
 }
 
-/// Declares a shading kernel once and its `_diffuse` and `_specular` compute entry points (256
-/// invocations): the kernel is written as `fn name<const SPECULAR: bool>(bindings) { body }`
-/// with its `#[spirv(...)]` built-ins and bindings; the macro emits it as a plain function
-/// (attributes dropped) and the two entries calling it with `false` / `true`. One macro for
-/// every technique's shading kernels.
-#[cfg(feature = "compute")]
-macro_rules! specular_entries {
+/// Declares a shader once and two entry points that differ in one compile-time flag: the
+/// shader is written as `fn name<const FLAG: bool>(bindings) { body }` with its `#[spirv(...)]`
+/// built-ins and bindings; the macro emits it as a plain function (attributes dropped) and the
+/// entries `$off` / `$on` (each declared `#[spirv($entry)]`, documented by its literal) calling
+/// it with `false` / `true`. The one macro behind every pair of variant entries:
+/// `specular_entries!` (compute) and the Forward+ fragment shaders' list layouts.
+macro_rules! variant_entries {
     (
-        $diffuse:ident, $specular:ident;
+        [$($entry:tt)+] $off:ident: $off_doc:literal, $on:ident: $on_doc:literal;
         $(#[$meta:meta])*
         fn $imp:ident<const $variant:ident: bool>($($(#[$attr:meta])* $arg:ident: $ty:ty),* $(,)?) $body:block
     ) => {
@@ -415,18 +417,34 @@ macro_rules! specular_entries {
         #[allow(clippy::too_many_arguments)]
         fn $imp<const $variant: bool>($($arg: $ty),*) $body
 
-        #[doc = concat!("[`", stringify!($imp), "`] without the specular term (scenes without specular materials).")]
-        #[spirv(compute(threads(256)))]
+        #[doc = concat!("[`", stringify!($imp), "`] ", $off_doc)]
+        #[spirv($($entry)+)]
         #[allow(clippy::too_many_arguments)]
-        pub fn $diffuse($($(#[$attr])* $arg: $ty),*) {
+        pub fn $off($($(#[$attr])* $arg: $ty),*) {
             $imp::<false>($($arg),*);
         }
 
-        #[doc = concat!("[`", stringify!($imp), "`] with the specular term.")]
-        #[spirv(compute(threads(256)))]
+        #[doc = concat!("[`", stringify!($imp), "`] ", $on_doc)]
+        #[spirv($($entry)+)]
         #[allow(clippy::too_many_arguments)]
-        pub fn $specular($($(#[$attr])* $arg: $ty),*) {
+        pub fn $on($($(#[$attr])* $arg: $ty),*) {
             $imp::<true>($($arg),*);
+        }
+    };
+}
+pub(crate) use variant_entries;
+
+/// Declares a shading kernel once and its `_diffuse` and `_specular` compute entry points (256
+/// invocations) through [`variant_entries`]: `fn name<const SPECULAR: bool>(bindings) { body }`.
+/// One macro for every technique's shading kernels.
+#[cfg(feature = "compute")]
+macro_rules! specular_entries {
+    ($diffuse:ident, $specular:ident; $($kernel:tt)+) => {
+        $crate::shading::variant_entries! {
+            [compute(threads(256))]
+            $diffuse: "without the specular term (scenes without specular materials).",
+            $specular: "with the specular term.";
+            $($kernel)+
         }
     };
 }

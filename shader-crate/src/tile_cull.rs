@@ -41,7 +41,7 @@ use spirv_std::num_traits::Float;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::reconstruct;
-use crate::scan::SCAN_SHARED_WORDS;
+use crate::scan::{workgroup_exclusive_scan, SCAN_SHARED_WORDS};
 use glam::Vec3;
 
 /// Invocations per workgroup (16 × 16).
@@ -321,6 +321,46 @@ impl TileCull {
         let a = first < n && self.keeps(&lights[first as usize]);
         let b = first + 1 < n && self.keeps(&lights[first as usize + 1]);
         (a, b)
+    }
+}
+
+/// One batch of step 4 compacted over the workgroup ([`TileCull::keep_batch`]): which of its two
+/// lights an invocation keeps, and their places among the batch's survivors in light-index order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeptPair {
+    /// The invocation's first light (the second is `first + 1`).
+    pub first: u32,
+    pub a: bool,
+    pub b: bool,
+    /// Survivors of the batch before this invocation's (an exclusive prefix sum).
+    pub rank: u32,
+    /// Survivors of the whole batch.
+    pub total: u32,
+}
+
+impl KeptPair {
+    /// Calls `put(k, light)` for each kept light, `k` being its place among the batch's survivors.
+    #[inline]
+    pub fn emit(&self, mut put: impl FnMut(u32, u32)) {
+        if self.a {
+            put(self.rank, self.first);
+        }
+        if self.b {
+            put(self.rank + self.a as u32, self.first + 1);
+        }
+    }
+}
+
+impl TileCull {
+    /// Step 4 for the batch of [`CULL_BATCH`] lights from `next`: [`Self::keeps_pair`], ranked
+    /// over the workgroup by a prefix sum (the scan's workgroup-memory words). Uniform control
+    /// flow; a caller puts a workgroup barrier between two batches (the scan's scratch).
+    #[inline]
+    pub fn keep_batch<C: Coop, S: SharedU32 + ?Sized>(&self, c: &C, s: &mut S, lights: &[PointLight], n: u32, next: u32) -> KeptPair {
+        let first = next + c.local_index() * LIGHTS_PER_INVOCATION;
+        let (a, b) = self.keeps_pair(lights, n, first);
+        let (rank, total) = workgroup_exclusive_scan(c, s, a as u32 + b as u32);
+        KeptPair { first, a, b, rank, total }
     }
 }
 

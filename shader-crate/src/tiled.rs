@@ -6,7 +6,7 @@
 //! 1–3. **Depth bounds, frustum, 2.5D mask** (`tiled-2.5d` only) — [`crate::tile_cull`] (Harada,
 //!    Mckee, Yang 2012; Harada 2012), shared with Forward+.
 //! 4. **Culling** — the workgroup tests the lights in batches of [`CULL_BATCH`] (each invocation
-//!    [`LIGHTS_PER_INVOCATION`] lights: [`TileCull::keeps_pair`]) and appends the survivors, in
+//!    [`LIGHTS_PER_INVOCATION`] lights: [`TileCull::keep_batch`]) and appends the survivors, in
 //!    index order, through a workgroup prefix sum to the tile-local list in workgroup memory
 //!    (Olsson & Assarsson 2011, "Tiled Shading", JGT; Harada et al. 2012).
 //! 5. **Shading** — every pixel sums its lights over the list ([`shading::shade_lights`]).
@@ -31,7 +31,6 @@ use crate::coop::gpu::GpuCoop;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
-use crate::scan::workgroup_exclusive_scan;
 use crate::shading::{self, specular_entries, BACKGROUND_RGBA8};
 use crate::tile_cull::*;
 use glam::Vec3;
@@ -83,7 +82,6 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     bounds: &[f32],
 ) -> TileOutput {
     let fp = &p.frame;
-    let li = c.local_index();
     // 1–3.
     let (px, cull) = tile_bounds(c, s, &fp.grid, tx, ty, p.mode, depth);
     let mut out = TileOutput { pixels: px.pixels, colours: [BACKGROUND_RGBA8; 4], tile_lights: 0, rounds: 0 };
@@ -94,18 +92,9 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     while next < n {
         let mut count = 0;
         while next < n && count + CULL_BATCH <= LIST_CAPACITY {
-            let first = next + li * LIGHTS_PER_INVOCATION;
-            let (a, b) = cull.keeps_pair(lights, n, first);
-            let (prefix, total) = workgroup_exclusive_scan(c, s, a as u32 + b as u32);
-            let mut w = SHARED_LIST + count + prefix;
-            if a {
-                s.store(w, first);
-                w += 1;
-            }
-            if b {
-                s.store(w, first + 1);
-            }
-            count += total;
+            let kept = cull.keep_batch(c, s, lights, n, next);
+            kept.emit(|k, light| s.store(SHARED_LIST + count + k, light));
+            count += kept.total;
             next += CULL_BATCH;
             c.workgroup_barrier();
         }

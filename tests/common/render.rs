@@ -1,6 +1,7 @@
 //! Rendering a scene for a test: settings, one frame, the scenes the tests use.
 use super::assets;
 use host::gpu::Gpu;
+use host::render::forward_plus::TileLists;
 use host::render::{self, Frame, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
@@ -23,13 +24,37 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         bvh_branching: 0,
         async_compute: true,
         sort: Default::default(),
+        fp_lists: Default::default(),
+    }
+}
+
+/// A technique and the layout of its tile lists (`--fp-lists`; only Forward+ reads it).
+pub type Run = (Technique, TileLists);
+
+/// What a test renders for `techniques`: Forward+ with both layouts of its tile lists, every other
+/// technique once (with the default layout, which it ignores).
+pub fn runs(techniques: &[Technique]) -> Vec<Run> {
+    techniques
+        .iter()
+        .flat_map(|&t| {
+            let layouts: &[TileLists] = if t == Technique::ForwardPlus { &TileLists::ALL } else { &[TileLists::Linked] };
+            layouts.iter().map(move |&l| (t, l))
+        })
+        .collect()
+}
+
+/// A run's technique and (for Forward+) list layout, for messages.
+pub fn label((technique, lists): Run) -> String {
+    match technique {
+        Technique::ForwardPlus => format!("{technique:?} ({} lists)", lists.name()),
+        t => format!("{t:?}"),
     }
 }
 
 /// Renders `scene` with `lights`; panics with the technique and the error.
 pub fn frame(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings) -> Frame {
     let flat = flatten(scene, s.normal_precision).unwrap_or_else(|e| panic!("{e:#}"));
-    render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{:?}: {e:#}", s.technique))
+    render::render(gpu, &scene_input(scene, &flat, lights), s).unwrap_or_else(|e| panic!("{}: {e:#}", label((s.technique, s.fp_lists))))
 }
 
 /// The error `render` answers for `scene` flattened at normal precision `flattened_at` and

@@ -102,6 +102,7 @@ fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Prec
         bvh_branching: 0,
         async_compute: true,
         sort: Default::default(),
+        fp_lists: Default::default(),
     }
 }
 

@@ -3,25 +3,81 @@
 //! 1. **depth pre-pass** (raster) → depth target and each pixel's winning draw; the depth is
 //!    copied into the G-buffer's depth buffer, so CPU checks and `--stats` read it as for every
 //!    other technique;
-//! 2. **culling** — tiled culling (per-tile depth bounds and frustum) into per-tile linked lists:
-//!    head buffer + node buffer + an atomic node counter;
+//! 2. **culling** — tiled culling (per-tile depth bounds and frustum) into per-tile lists, in the
+//!    layout `--fp-lists` picks ([`TileLists`]):
+//!    * `linked`: head buffer + node buffer + an atomic node counter;
+//!    * `array`: range buffer (`(offset, count)` per tile) + index buffer + an atomic counter;
+//!      each culling workgroup writes its tile's array itself (`shaders::forward_plus` says why);
 //! 3. **shading** (raster) — forward pass with depth test EQUAL over the pre-pass's depth, each
-//!    fragment walking its tile's list; the colour target is copied into the frame.
+//!    fragment walking its tile's linked list or reading its tile's index range; the colour
+//!    target is copied into the frame.
 //!
-//! The node buffer's capacity is the one view-dependent size: the culling counter ends at the
-//! nodes the frame needs; if that exceeds the buffer, it grows (need + 25 %) and the frame re-runs.
+//! The node or index buffer's capacity is the one view-dependent size: the culling counter ends
+//! at the light references the frame needs; if that exceeds the buffer, it grows (need + 25 %)
+//! and the frame re-runs.
 //!
-//! Memory: heads 4 B per tile, nodes 8 B per light reference, the reversed index list, and a
-//! depth, a colour and a winning-draw target (4 B per pixel each) plus the winners' buffer copy.
+//! Memory: `linked` heads 4 B per tile and nodes 8 B per light reference, `array` ranges 8 B per
+//! tile and indices 4 B per light reference; both the reversed index list, and a depth, a colour
+//! and a winning-draw target (4 B per pixel each) plus the winners' buffer copy.
 use super::technique::{grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
 use super::Draw;
 use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
 use crate::vk::{Attachment, Binding, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
-use shaders::forward_plus::{FP_COUNTER_NODES, MAX_LIGHTS_LLVMPIPE};
+use shaders::forward_plus::{FP_COUNTER_REFS, MAX_LIGHTS_LLVMPIPE};
 use shaders::shading::NO_NODE;
 use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS};
 use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED};
+
+/// Layout of Forward+'s per-tile light lists (`render --fp-lists`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TileLists {
+    /// Linked lists built with atomics (a node per light reference: light, next); each fragment
+    /// walks its tile's list, one dependent load per light.
+    #[default]
+    Linked,
+    /// Contiguous arrays written by the culling workgroups (an index per light reference, an
+    /// `(offset, count)` per tile); each fragment reads its tile's index range.
+    Array,
+}
+
+impl TileLists {
+    /// Both layouts.
+    pub const ALL: [TileLists; 2] = [TileLists::Linked, TileLists::Array];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Linked => "linked",
+            Self::Array => "array",
+        }
+    }
+
+    /// Index of the layout's pipelines (`Kernels::forward_plus_cull`, `RasterPipelines::forward_shade`).
+    fn index(self) -> usize {
+        match self {
+            Self::Linked => 0,
+            Self::Array => 1,
+        }
+    }
+
+    /// Words per tile of the tile buffer (a head; an offset and a count) and per light reference
+    /// of the entry buffer (light and next; an index).
+    fn words(self) -> (u64, u64) {
+        match self {
+            Self::Linked => (1, 2),
+            Self::Array => (2, 1),
+        }
+    }
+
+    /// Names of the tile buffer and the entry buffer.
+    fn buffer_names(self) -> (&'static str, &'static str) {
+        match self {
+            Self::Linked => ("tile list heads", "light list nodes"),
+            Self::Array => ("tile light ranges", "tile light indices"),
+        }
+    }
+}
 
 pub struct ForwardPlus {
     depth: Image,
@@ -33,12 +89,16 @@ pub struct ForwardPlus {
     reversed: Buffer,
     /// Index count of the merged list.
     total_indices: u32,
-    heads: Buffer,
-    nodes: Buffer,
+    lists: TileLists,
+    /// Per tile: the list's head (`linked`) or its `(offset, count)` (`array`).
+    tiles: Buffer,
+    /// Per light reference: a node (`linked`) or a light index (`array`).
+    entries: Buffer,
     counters: Buffer,
+    /// Light references `entries` holds.
     capacity: u32,
     params: TiledParams,
-    /// Nodes the last frame needed.
+    /// Light references the last frame needed.
     last_refs: u32,
 }
 
@@ -51,11 +111,13 @@ impl ForwardPlus {
             bail!("--tile-size {}: forward+ culls tiles of up to {MAX_TILED_TILE} px", g.tile_size);
         }
         if gpu.ctx.info.is_llvmpipe() && frame.num_lights > MAX_LIGHTS_LLVMPIPE {
-            bail!("{} lights: on lavapipe (loop limiter) a forward+ fragment walks at most {MAX_LIGHTS_LLVMPIPE} list nodes", frame.num_lights);
+            bail!("{} lights: on lavapipe (loop limiter) a forward+ fragment shades at most {MAX_LIGHTS_LLVMPIPE} lights of its tile's list", frame.num_lights);
         }
         let ctx = &gpu.ctx;
         let (w, h) = (g.width, g.height);
         let capacity = initial_list_capacity(frame.num_lights);
+        let lists = f.settings.fp_lists;
+        let tile_bytes = 4 * lists.words().0 * (g.tiles_x * g.tiles_y) as u64;
         let reversed: Vec<u32> = f.indices.chunks_exact(3).rev().flatten().copied().collect();
         let made = (|| -> VkResult<Self> {
             Ok(Self {
@@ -65,8 +127,9 @@ impl ForwardPlus {
                 winners: Buffer::storage(ctx, "winning draws", 4 * w as u64 * h as u64)?,
                 reversed: Buffer::indices(ctx, "reversed indices", &reversed)?,
                 total_indices: reversed.len() as u32,
-                heads: Buffer::storage(ctx, "tile list heads", 4 * (g.tiles_x * g.tiles_y) as u64)?,
-                nodes: Self::node_buffer(gpu, capacity)?,
+                lists,
+                tiles: Buffer::storage(ctx, lists.buffer_names().0, tile_bytes)?,
+                entries: Self::entry_buffer(gpu, lists, capacity)?,
                 counters: Buffer::storage(ctx, "counters", 4 * COUNTERS as u64)?,
                 capacity,
                 params: TiledParams { frame: *frame, mode: MODE_TILED, _pad: [0; 3] },
@@ -76,9 +139,11 @@ impl ForwardPlus {
         made.context("allocating the forward+ buffers")
     }
 
-    fn node_buffer(gpu: &Gpu, capacity: u32) -> VkResult<Buffer> {
-        crate::vk::memory::check_range(&gpu.ctx, "light list nodes", 8 * capacity as u64)?;
-        Buffer::storage(&gpu.ctx, "light list nodes", 8 * capacity as u64)
+    /// The node or index buffer for `capacity` light references.
+    fn entry_buffer(gpu: &Gpu, lists: TileLists, capacity: u32) -> VkResult<Buffer> {
+        let (name, bytes) = (lists.buffer_names().1, 4 * lists.words().1 * capacity as u64);
+        crate::vk::memory::check_range(&gpu.ctx, name, bytes)?;
+        Buffer::storage(&gpu.ctx, name, bytes)
     }
 
     /// Draws every draw of the scene with `pipes` (variant per draw: see `shaders::kernels`'
@@ -110,22 +175,35 @@ impl ForwardPlus {
         Ok(())
     }
 
-    /// The longest tile list of the last frame, walked on the CPU from the read-back heads and
-    /// nodes (node `n` = words `2n` light, `2n + 1` next; at most `refs` steps per list).
-    fn longest_list(&mut self, refs: u32) -> Result<u32> {
+    /// Each tile's light list of the last frame, read back: walked from the heads and nodes
+    /// (`linked`: node `n` = words `2n` light, `2n + 1` next; at most `refs` steps per list), or
+    /// the tile's range of the indices (`array`), clamped to the `refs` entries written.
+    fn read_tile_lists(&mut self, refs: u32) -> Result<Vec<Vec<u32>>> {
         let g = &self.params.frame.grid;
-        let heads: Vec<u32> = self.heads.read((g.tiles_x * g.tiles_y) as usize)?;
-        let nodes: Vec<u32> = self.nodes.read(2 * refs as usize)?;
-        let mut longest = 0;
-        for &h in &heads {
-            let (mut n, mut len) = (h, 0u32);
-            while n != NO_NODE && n < refs && len <= refs {
-                len += 1;
-                n = nodes[2 * n as usize + 1];
-            }
-            longest = longest.max(len);
-        }
-        Ok(longest)
+        let tiles = (g.tiles_x * g.tiles_y) as usize;
+        let (tile_words, entry_words) = self.lists.words();
+        let per_tile: Vec<u32> = self.tiles.read(tile_words as usize * tiles)?;
+        let entries: Vec<u32> = self.entries.read(entry_words as usize * refs as usize)?;
+        Ok(match self.lists {
+            TileLists::Linked => per_tile
+                .iter()
+                .map(|&h| {
+                    let (mut n, mut list) = (h, Vec::new());
+                    while n != NO_NODE && n < refs && list.len() <= refs as usize {
+                        list.push(entries[2 * n as usize]);
+                        n = entries[2 * n as usize + 1];
+                    }
+                    list
+                })
+                .collect(),
+            TileLists::Array => per_tile
+                .chunks_exact(2)
+                .map(|r| {
+                    let end = (r[0] as u64 + r[1] as u64).min(refs as u64) as usize;
+                    entries[(r[0] as usize).min(end)..end].to_vec()
+                })
+                .collect(),
+        })
     }
 }
 
@@ -150,12 +228,16 @@ impl LightingTechnique for ForwardPlus {
             Ok(())
         })?;
         rec.pass("culling", |rec| {
-            rec.fill(&self.heads, u32::MAX);
+            if self.lists == TileLists::Linked {
+                rec.fill(&self.tiles, NO_NODE);
+            }
             rec.fill(&self.counters, 0);
             let g = &self.params.frame.grid;
             let p = TiledParams { frame: FrameParams { light_capacity: self.capacity, ..self.params.frame }, ..self.params };
-            rec.dispatch(&gpu.kernels.forward_plus_cull, &[&f.targets.depth_buf, f.lights, &self.counters, &self.heads, &self.nodes], &p, [g.tiles_x, g.tiles_y, 1])?;
-            // The lists (and the counter) are read by the forward pass's fragments.
+            let cull = &gpu.kernels.forward_plus_cull[self.lists.index()];
+            rec.dispatch(cull, &[&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries], &p, [g.tiles_x, g.tiles_y, 1])?;
+            // The lists (and the counter) are read by the forward pass's fragments; every
+            // workgroup writes its tile's range (`array`), so only the heads need a fill.
             rec.fragments_read_earlier_writes();
             Ok(())
         })?;
@@ -163,8 +245,8 @@ impl LightingTechnique for ForwardPlus {
             rec.transition(&self.colour, ImageUse::Undefined, ImageUse::ColourTarget);
             let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::shading::BACKGROUND_RGBA8, 0, 0, 0]) };
             rec.begin_rendering(&[colour], Attachment { image: &self.depth, load: Load::Keep }, &self.reversed);
-            let extra = [&self.heads, &self.nodes, f.lights, f.materials, &self.counters, &self.winners];
-            self.draw_all(rec, f, &raster.forward_shade, &extra, true)?;
+            let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners];
+            self.draw_all(rec, f, &raster.forward_shade[self.lists.index()], &extra, true)?;
             rec.end_rendering();
             rec.transition(&self.colour, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.copy_to_buffers(&[(&self.colour, f.frame)]);
@@ -174,27 +256,33 @@ impl LightingTechnique for ForwardPlus {
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
         let c: Vec<u32> = self.counters.read(COUNTERS as usize)?;
-        self.last_refs = c[FP_COUNTER_NODES as usize];
+        self.last_refs = c[FP_COUNTER_REFS as usize];
         if self.last_refs <= self.capacity {
             return Ok(None);
         }
         let grown = grown_capacity(self.last_refs);
-        self.nodes = Self::node_buffer(gpu, grown).with_context(|| format!("growing the node buffer to {grown} nodes"))?;
+        let name = self.lists.buffer_names().1;
+        self.entries = Self::entry_buffer(gpu, self.lists, grown).with_context(|| format!("growing the {name} to {grown} light references"))?;
         self.capacity = grown;
-        Ok(Some(format!("node buffer to {grown} nodes")))
+        Ok(Some(format!("{name} to {grown} light references")))
     }
 
     fn stats(&mut self) -> Result<ListStats> {
         let refs = self.last_refs;
-        Ok(ListStats { light_refs: refs, max_list: self.longest_list(refs)?, ..ListStats::default() })
+        let max_list = self.read_tile_lists(refs)?.iter().map(|l| l.len() as u32).max().unwrap_or(0);
+        Ok(ListStats { light_refs: refs, max_list, ..ListStats::default() })
+    }
+
+    fn tile_lists(&mut self) -> Result<Option<Vec<Vec<u32>>>> {
+        Ok(Some(self.read_tile_lists(self.last_refs)?))
     }
 
     fn buffers(&self) -> Vec<(String, u64)> {
         let g = &self.params.frame.grid;
         let targets = 12 * g.width as u64 * g.height as u64;
         vec![
-            (self.heads.name.clone(), self.heads.size),
-            (self.nodes.name.clone(), self.nodes.size),
+            (self.tiles.name.clone(), self.tiles.size),
+            (self.entries.name.clone(), self.entries.size),
             (self.counters.name.clone(), self.counters.size),
             (self.winners.name.clone(), self.winners.size),
             (self.reversed.name.clone(), self.reversed.size),

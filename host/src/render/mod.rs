@@ -95,8 +95,8 @@ techniques! {
     /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
     /// depth, staged sphere–box assignment with subgroup-aggregated atomics.
     ClusteredAabb = "clustered-aabb" => clustered_aabb::ClusteredAabb::new,
-    /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists,
-    /// forward raster shading with depth test EQUAL.
+    /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists or
+    /// arrays (`--fp-lists`), forward raster shading with depth test EQUAL.
     ForwardPlus = "forward-plus" => forward_plus::ForwardPlus::new,
 }
 
@@ -143,6 +143,8 @@ pub struct Settings {
     pub async_compute: bool,
     /// GPU sort of the lights' Morton keys (`clustered-bvh`).
     pub sort: sort::SortKind,
+    /// Layout of the per-tile light lists (`forward-plus`).
+    pub fp_lists: forward_plus::TileLists,
 }
 
 /// GPU results kept for checks and statistics.
@@ -161,6 +163,8 @@ pub struct Readback {
     pub lights_view: Vec<PointLight>,
     pub grid: ClusterGrid,
     pub bounds: Vec<f32>,
+    /// Each screen tile's light list as the GPU stored it (`forward-plus`; empty otherwise).
+    pub tile_lists: Vec<Vec<u32>>,
 }
 
 /// A rendered frame.
@@ -316,6 +320,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let lists = tech.stats()?;
     buffers.extend(tech.buffers());
     let cluster_lists = if s.read_back { tech.cluster_lists()? } else { None };
+    let tile_lists = if s.read_back { tech.tile_lists()?.unwrap_or_default() } else { Vec::new() };
     drop(tech);
     let pixels: Vec<u32> = frame_buf.read(n as usize)?;
     let readback = if s.read_back {
@@ -328,7 +333,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             .collect();
         let albedo: Vec<u32> = targets.albedo_buf.read(n as usize)?;
         let c = cluster_lists.unwrap_or(technique::ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
-        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds })
+        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds, tile_lists })
     } else {
         None
     };

@@ -22,6 +22,8 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
                     "vulkan": device.api_version, "subgroup_size": device.subgroup_size },
         "scene": scene,
         "technique": format!("{:?}", s.technique),
+        // The per-tile list layout (`--fp-lists`) where the technique has one.
+        "fp_lists": (s.technique == super::Technique::ForwardPlus).then(|| s.fp_lists.name()),
         "resolution": [s.width, s.height],
         "tile_size": s.tile_size,
         "slices": frame.grid.num_slices,

@@ -12,7 +12,7 @@
 //!    frame (at most [`MAX_REGROWTHS`] times), so no frame ever drops a light;
 //! 4. **report**: [`LightingTechnique::stats`] (light lists of the last frame),
 //!    [`LightingTechnique::buffers`] (bytes per buffer) and, for CPU checks,
-//!    [`LightingTechnique::cluster_lists`].
+//!    [`LightingTechnique::cluster_lists`] and [`LightingTechnique::tile_lists`].
 use super::gbuffer::{Geometry, Targets, Textures};
 use super::Settings;
 use crate::gpu::Gpu;
@@ -119,6 +119,12 @@ pub trait LightingTechnique {
 
     /// The per-cluster lists of the last frame, for CPU checks (`None`: not a clustered technique).
     fn cluster_lists(&mut self) -> Result<Option<ClusterLists>> {
+        Ok(None)
+    }
+
+    /// Each screen tile's light list of the last frame as the GPU stored it (tiles row by row),
+    /// for CPU checks (`None`: the technique keeps no per-tile lists in memory).
+    fn tile_lists(&mut self) -> Result<Option<Vec<Vec<u32>>>> {
         Ok(None)
     }
 }
