@@ -34,10 +34,12 @@ use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED};
 pub enum TileLists {
     /// Linked lists built with atomics (a node per light reference: light, next); each fragment
     /// walks its tile's list, one dependent load per light.
-    #[default]
     Linked,
     /// Contiguous arrays written by the culling workgroups (an index per light reference, an
-    /// `(offset, count)` per tile); each fragment reads its tile's index range.
+    /// `(offset, count)` per tile); each fragment reads its tile's index range. The default: on
+    /// the H200 (Sponza 1080p) its frames take 15.0 / 32.9 ms at 1k / 100k lights against the
+    /// linked lists' 15.9 / 36.6 ms, and on lavapipe a lit 480×270 frame 2.2 s against 61 s.
+    #[default]
     Array,
 }
 
