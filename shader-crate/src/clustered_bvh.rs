@@ -47,19 +47,29 @@ pub fn bvh_spheres(
     }
 }
 
-/// Step 2b: boxes of level-0 nodes (`B` sorted lights each).
-#[spirv(compute(threads(256)))]
+/// Step 2b: boxes of level-0 nodes (`B` sorted lights each), one subgroup per node
+/// ([`light_bvh::leaf_node_box_subgroup`]).
+#[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
+#[allow(clippy::too_many_arguments)]
 pub fn bvh_leaves(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
     #[spirv(push_constant)] p: &BvhParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] spheres: &[LightSphere],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &mut [ClusterAabb],
 ) {
-    let node = linear_index(wg, nwg, local);
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let node = walk_cluster(&c, wg, nwg);
     if node < p.nodes {
-        nodes[node as usize] = light_bvh::leaf_node_box(spheres, p.count, p.branching, node);
+        let bx = light_bvh::leaf_node_box_subgroup(&c, spheres, p.count, p.branching, node);
+        if lane == 0 {
+            nodes[node as usize] = bx;
+        }
     }
 }
 
@@ -79,7 +89,7 @@ pub fn bvh_level(
     }
 }
 
-/// Unique cluster handled by this subgroup.
+/// The item (unique cluster, leaf node) this subgroup handles.
 #[inline]
 pub fn walk_cluster<C: Coop>(c: &C, wg: UVec3, nwg: UVec3) -> u32 {
     (wg.y * nwg.x + wg.x) * c.num_subgroups() + c.subgroup_id()

@@ -93,7 +93,8 @@ pub const RADIX_CHAINED: Kernel<RadixParams> = radix("entries::radix_chained", 6
 // Clustered-BVH technique (`clustered_bvh.rs`).
 pub const LIGHT_KEYS: Kernel<MortonParams> = linear("clustered_bvh::light_keys", 3);
 pub const BVH_SPHERES: Kernel<BvhParams> = linear("clustered_bvh::bvh_spheres", 3);
-pub const BVH_LEAVES: Kernel<BvhParams> = linear("clustered_bvh::bvh_leaves", 2);
+/// One subgroup per leaf node: cooperative.
+pub const BVH_LEAVES: Kernel<BvhParams> = Kernel::new("clustered_bvh::bvh_leaves", 2, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
 /// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
 pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =

@@ -173,6 +173,36 @@ pub fn leaf_node_box(spheres: &[LightSphere], n: u32, b: u32, node: u32) -> Clus
     bx
 }
 
+/// [`leaf_node_box`] by one subgroup (every lane calls it and gets the box): lane `l` unites
+/// spheres `first + l, first + l + w, …` (coalesced reads, `b / w` of them instead of `b` in a
+/// row), then the lanes' boxes are united by butterfly shuffles. A union of boxes is exact in
+/// any order, so the box is [`leaf_node_box`]'s at every width.
+#[inline]
+pub fn leaf_node_box_subgroup<C: Coop>(c: &C, spheres: &[LightSphere], n: u32, b: u32, node: u32) -> ClusterAabb {
+    let w = c.subgroup_size();
+    let first = node * b;
+    let end = if first + b < n { first + b } else { n };
+    let mut bx = EMPTY_BOX;
+    let mut s = first + c.lane();
+    while s < end {
+        bx = union(&bx, &sphere_box(&spheres[s as usize]));
+        s += w;
+    }
+    let mut m = 1;
+    while m < w {
+        let x = |v: f32| f32::from_bits(c.shuffle_xor(v.to_bits(), m));
+        let other = ClusterAabb {
+            min: [x(bx.min[0]), x(bx.min[1]), x(bx.min[2])],
+            _pad0: 0.0,
+            max: [x(bx.max[0]), x(bx.max[1]), x(bx.max[2])],
+            _pad1: 0.0,
+        };
+        bx = union(&bx, &other);
+        m *= 2;
+    }
+    bx
+}
+
 /// Box of node `node` of level `level ≥ 1` from its children in `nodes`.
 #[inline]
 pub fn inner_node_box(nodes: &[ClusterAabb], n: u32, b: u32, level: u32, node: u32) -> ClusterAabb {

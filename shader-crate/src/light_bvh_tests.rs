@@ -87,6 +87,29 @@ fn nodes_contain_children_and_traversal_equals_brute_force() {
     }
 }
 
+/// The subgroup's leaf box equals the one-invocation box at every width 4–64 and both branchings.
+#[test]
+fn subgroup_leaf_boxes_equal_the_serial_ones() {
+    for b in BVH_BRANCHINGS {
+        for (n, radius) in CASES {
+            let ls = lights(n, n as u32 ^ 0x77, radius);
+            let order: Vec<u32> = (0..n as u32).collect();
+            let spheres = sorted_spheres(&ls, &order);
+            let leaves = level_nodes(n as u32, 0, b);
+            for width in [4, 8, 16, 32, 64] {
+                let emu = Emulation { width, workgroup_size: width, shared_words: 0 };
+                let boxes = run_workgroups(emu, leaves, |node, c, _| leaf_node_box_subgroup(c, &spheres, n as u32, b, node));
+                for node in 0..leaves {
+                    let want = leaf_node_box(&spheres, n as u32, b, node);
+                    for lane in 0..width {
+                        assert_eq!(boxes[(node * width + lane) as usize], want, "b={b} n={n} w={width} node {node} lane {lane}");
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The subgroup walk at every width 4–64 and both branchings: every lane returns the same count,
 /// the emitted slots are exactly `0..count` (dense, no slot twice), and the lights are the
 /// brute-force set.

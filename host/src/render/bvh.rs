@@ -76,7 +76,7 @@ impl LightBvh {
             let leaves = level_nodes(n, 0, b);
             let p = BvhParams { count: n, level: 0, nodes: leaves, branching: b };
             rec.dispatch_linear(&k.bvh_spheres, &[lights, &self.order, &self.spheres], &p, n)?;
-            rec.dispatch_linear(&k.bvh_leaves, &[&self.spheres, &self.nodes], &p, leaves)?;
+            rec.dispatch_subgroups(&k.bvh_leaves, &[&self.spheres, &self.nodes], &p, leaves)?;
             for level in 1..level_count(n, b) {
                 let nodes = level_nodes(n, level, b);
                 let p = BvhParams { count: n, level, nodes, branching: b };
