@@ -302,6 +302,9 @@ pub const RANGE_BATCH: u32 = 4;
 #[inline]
 fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, end: u32, sum: &mut Vec3) -> u32 {
     let first = list.start();
+    if end <= first {
+        return 0;
+    }
     let mut t = first;
     while t < end {
         shade_batch::<SPECULAR, L>(s, effects, lights, list, t, end, sum);
@@ -311,7 +314,7 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, li
             t += RANGE_BATCH;
         }
     }
-    if end > first { end - first } else { 0 }
+    end - first
 }
 
 /// Entries `t..min(t + RANGE_BATCH, end)` of [`shade_range`] (`t < end`).
