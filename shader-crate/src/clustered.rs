@@ -49,8 +49,11 @@ pub fn pixel_keys(
     keys[i as usize] = key;
     // Most pixels find their page marked already: a load instead of a store to a word that
     // thousands of pixels share.
-    if key != INVALID_KEY && marks[page_table::page_of(key) as usize] == 0 {
-        marks[page_table::page_of(key) as usize] = 1;
+    if key != INVALID_KEY {
+        let page = page_table::page_of(key) as usize;
+        if marks[page] == 0 {
+            marks[page] = 1;
+        }
     }
 }
 

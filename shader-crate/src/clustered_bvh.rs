@@ -4,7 +4,7 @@
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
 use crate::cluster_bounds::cluster_aabb_of_key;
 use crate::coop::gpu::GpuCoop;
-use crate::coop::Coop;
+use crate::coop::{subgroup_item, Coop};
 use crate::layout::*;
 use crate::light_bvh;
 use crate::shading::linear_index;
@@ -64,7 +64,7 @@ pub fn bvh_leaves(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] nodes: &mut [ClusterAabb],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let node = walk_cluster(&c, wg, nwg);
+    let node = subgroup_item(&c, wg, nwg);
     if node < p.nodes {
         let bx = light_bvh::leaf_node_box_subgroup(&c, spheres, p.count, p.branching, node);
         if lane == 0 {
@@ -87,12 +87,6 @@ pub fn bvh_level(
         let b = light_bvh::inner_node_box(nodes, p.count, p.branching, p.level, node);
         nodes[(light_bvh::level_offset(p.count, p.level, p.branching) + node) as usize] = b;
     }
-}
-
-/// The item (unique cluster, leaf node) this subgroup handles.
-#[inline]
-pub fn walk_cluster<C: Coop>(c: &C, wg: UVec3, nwg: UVec3) -> u32 {
-    (wg.y * nwg.x + wg.x) * c.num_subgroups() + c.subgroup_id()
 }
 
 /// Lights of cluster `key` by the subgroup-parallel BVH walk (count on every lane; `emit(k,
@@ -134,7 +128,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] nodes: &[ClusterAabb],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let cl = walk_cluster(&c, wg, nwg);
+    let cl = subgroup_item(&c, wg, nwg);
     if cl >= p.frame.count {
         return;
     }
@@ -170,7 +164,7 @@ pub fn cluster_light_fill_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] nodes: &[ClusterAabb],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let cl = walk_cluster(&c, wg, nwg);
+    let cl = subgroup_item(&c, wg, nwg);
     if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }

@@ -3,6 +3,7 @@
 //! must match the handles in [`crate::kernels`] (the GPU parity tests cover every element, so a
 //! mismatch fails them).
 use crate::coop::gpu::GpuCoop;
+use crate::coop::subgroup_item;
 use crate::layout::*;
 use crate::light_lists::AtomicAdd;
 use crate::shading::linear_index;
@@ -379,7 +380,7 @@ pub fn bitonic_block_sort(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] values_out: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let block = (wg.y * nwg.x + wg.x) * num_subgroups + subgroup_id;
+    let block = subgroup_item(&c, wg, nwg);
     let base = block * p.run;
     if base >= p.count {
         return;
@@ -455,7 +456,7 @@ pub fn bitonic_merge(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] values_out: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let index = (wg.y * nwg.x + wg.x) * num_subgroups + subgroup_id;
+    let index = subgroup_item(&c, wg, nwg);
     let lv = bitonic::Level { n: p.count, run: p.run, stride: p.stride, keep: p.keep };
     if let Some(piece) = bitonic::piece_of(&lv, boundaries, index) {
         bitonic::merge_piece(&c, keys, values, piece, keys_out, values_out);

@@ -27,6 +27,14 @@ pub mod gpu;
 #[cfg(not(target_arch = "spirv"))]
 pub mod cpu;
 
+/// The item (block, piece, cluster, leaf node) of a kernel that gives each item its own
+/// subgroup: workgroup index · subgroups per workgroup + subgroup id, the numbering
+/// `Recorder::dispatch_subgroups` dispatches for.
+#[inline]
+pub fn subgroup_item<C: Coop>(c: &C, wg: spirv_std::glam::UVec3, nwg: spirv_std::glam::UVec3) -> u32 {
+    (wg.y * nwg.x + wg.x) * c.num_subgroups() + c.subgroup_id()
+}
+
 /// Subgroup and workgroup operations of one invocation.
 pub trait Coop {
     /// Invocations per subgroup (the SPIR-V `SubgroupSize` built-in).
