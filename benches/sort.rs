@@ -19,13 +19,16 @@
 //! `argsort` + gather, `benches/cub_sort.py`) where the device is an NVIDIA GPU with CuPy, with
 //! the ratio to CUB.
 //!
-//! `cargo bench -p host --bench sort`. Environment: `MANYLIGHTS_DEVICE`; GPU sizes
+//! `cargo bench -p host --bench sort`. Environment: `MANYLIGHTS_DEVICE`;
+//! `MANYLIGHTS_BITONIC_KEEPS` (e.g. `1,2,4,8`: the bitonic sort again with each splitter keep,
+//! beside the default); GPU sizes
 //! `MANYLIGHTS_SORT_SIZES` (default 1k,64k,1M,4M,16M; sizes whose buffers exceed the device's
 //! `maxStorageBufferRange` are skipped with a note); emulated sizes `MANYLIGHTS_SORT_CPU_SIZES`
 //! (default 1k,64k,1M; a few µs per key) at subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default
 //! 8). lavapipe's timestamps do not bracket its work: quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use host::gpu::Gpu;
+use host::render::bitonic::BitonicSort;
 use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind};
 use host::vk::{Buffer, ContextOptions, Profiler};
 use shaders::morton::{MortonQuantizer, MORTON30_BITS};
@@ -93,17 +96,23 @@ fn gpu_sizes(gpu: &Gpu) -> Vec<usize> {
         .collect()
 }
 
-/// The sorts timed on the GPU: the device's radix variant, the other radix variant where the
-/// device can run both, and the bitonic sort.
+/// The sorts timed on the GPU: the device's radix variant, reduce-then-scan too where that is the
+/// chained scan, and the bitonic sort (with each keep of `MANYLIGHTS_BITONIC_KEEPS` too).
 fn gpu_sorters(gpu: &Gpu, n: u32) -> Vec<(String, LightSorter)> {
     let radix = RadixSort::new(gpu, n).expect("radix sort buffers");
     let name = |c: CrossTile| format!("gpu radix {} (timestamps)", if c == CrossTile::Chained { "chained" } else { "reduce-then-scan" });
-    let mut v = vec![(name(radix.cross_tile()), LightSorter::Radix(Box::new(radix)))];
-    if gpu.ctx.info.workgroups_progress() {
+    let cross = radix.cross_tile();
+    let mut v = vec![(name(cross), LightSorter::Radix(Box::new(radix)))];
+    // The other variant where the device's choice for `n` is the chained scan.
+    if cross == CrossTile::Chained {
         let other = RadixSort::with_cross_tile(gpu, n, CrossTile::ReduceThenScan).expect("radix sort buffers");
         v.push((name(CrossTile::ReduceThenScan), LightSorter::Radix(Box::new(other))));
     }
     v.push(("gpu bitonic (timestamps)".into(), LightSorter::new(gpu, SortKind::Bitonic, n).expect("bitonic sort buffers")));
+    for keep in env_sizes("MANYLIGHTS_BITONIC_KEEPS", &[]) {
+        let sort = BitonicSort::with_keep(gpu, n, keep as u32).expect("bitonic sort buffers");
+        v.push((format!("gpu bitonic keep {keep} (timestamps)"), LightSorter::Bitonic(Box::new(sort))));
+    }
     v
 }
 

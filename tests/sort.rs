@@ -15,7 +15,7 @@ mod common;
 use host::gpu::Gpu;
 use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind};
 use host::vk::Buffer;
-use shaders::bitonic::{block_elems, sample_stride, SPLITTER_KEEP};
+use shaders::bitonic::{sample_stride, BLOCK, SPLITTER_KEEP};
 use shaders::radix::RADIX_TILE;
 use shaders::sort_inputs::shapes as inputs;
 
@@ -64,7 +64,7 @@ fn lengths(gpu: &Gpu, kind: SortKind) -> Vec<usize> {
     }
     if kind == SortKind::Bitonic {
         let w = gpu.ctx.info.min_subgroup_size;
-        let (block, piece) = (block_elems(w) as usize, (SPLITTER_KEEP * sample_stride(w)) as usize);
+        let (block, piece) = (BLOCK as usize, (SPLITTER_KEEP * sample_stride(w)) as usize);
         lengths.extend(block..=2 * block + 1);
         lengths.extend(piece..=2 * piece + 1);
         lengths.sort_unstable();

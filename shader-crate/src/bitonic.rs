@@ -3,11 +3,16 @@
 //! lights of clustered shading). An alternative to [`crate::radix`]; not stable.
 //!
 //! Steps (W = subgroup width from [`Coop::subgroup_size`], never hard-coded; M = 4·W):
-//! 1. **block sort** ([`block_sort`], one dispatch) — each subgroup sorts a block of
-//!    `run0 ≤ M` elements barrier-free: lane `l` holds elements `4l..4l+3` (Ye §3.1), the bitonic
-//!    network runs distances `d < 4` in registers and `d ≥ 4` with `shuffle_xor(d/4)`. Slots past
-//!    the block or the input are *pads*, ordered after every real key by comparing
-//!    `(pad flag, key)`, so a real key `0xFFFF_FFFF` is never mistaken for padding.
+//! 1. **block sort** ([`sort_block`], one dispatch) — each workgroup of 256 invocations sorts a
+//!    block of [`BLOCK`] = 1 024 elements with a bitonic network: an invocation holds 4
+//!    consecutive elements (Ye §3.1), distances `d < 4` run in registers, `4 ≤ d < M` with
+//!    `shuffle_xor(d/4)` inside a subgroup, `d ≥ M` through workgroup memory (8 KiB: keys and
+//!    tags). The network moves each element's position in the block (its tag) instead of its
+//!    value; the values are gathered once at the end. Slots past the input are *pads*, ordered
+//!    after every real key by comparing `(pad flag, key)`, so a real key `0xFFFF_FFFF` is never
+//!    mistaken for padding. (A block of one subgroup's M elements, as Ye's, left 3 more merge
+//!    levels at W = 32: on an NVIDIA H200 the workgroup block took 1M pairs from 1.134 to
+//!    0.555 ms together with the pipelined merge below.)
 //! 2. **merge levels**, run length `R = run0, 2·run0, …` while `R < n`, ping-ponging buffers:
 //!    - a. **splitters** ([`splitter`], only at levels where a pair of runs is larger than one
 //!      piece — "when the runs no longer fill the GPU", Ye §4.2): for each pair of runs (A, B)
@@ -34,38 +39,67 @@
 //! Parameters: `g` = [`sample_stride`] = `2·W_min` (one merge step of the narrowest subgroup the
 //! device may pick), `k` = [`SPLITTER_KEEP`] = 8 → a piece is at most 10 merge steps, so one
 //! invocation's loops run a few hundred iterations — far under llvmpipe's 65 535-iteration
-//! limiter — and a level has about `n / (g·k)` pieces (2 048 for 2^20 keys at W = 32). Levels with
-//! `2·⌈R/g⌉ ≤ k` (R ≤ 2·M) give one piece per pair and skip the splitter dispatch, so a level is
-//! 1 or 2 dispatches; `⌈log₂(n / run0)⌉` levels: 2^20 keys take 29 dispatches at W = 8 (15
-//! levels) and 25 at W = 32 (13 levels).
+//! limiter — and a level has about `n / (g·k)` pieces (2 048 for 2^20 keys at W = 32). The host
+//! picks `k` per sort size ([`splitter_keep`]: 1 … 8, about [`TARGET_PIECES`] pieces a level).
+//! Levels with `2·⌈R/g⌉ ≤ k` give one piece per pair and skip the splitter dispatch, so a level
+//! is 1 or 2 dispatches; `⌈log₂(n / BLOCK)⌉` levels: 2^20 keys take 10 levels at every width.
 //!
 //! Memory: keys + values double-buffered (8 B of scratch per element) plus 8 B per piece of
 //! boundaries (≈ n/16 B at W = 8, n/64 B at W = 32).
 //!
-//! Width independence: the host plans blocks and strides with the device's *smallest* subgroup
-//! width (`run0 = 4·W_min`, `g = 2·W_min`); a kernel that runs with a wider subgroup sorts a
-//! `run0` block in its larger register buffer (the rest is padding) and merges with larger steps,
-//! so the result does not depend on the width the driver picks (tested on the CPU).
-use crate::coop::Coop;
+//! Width independence: blocks are [`BLOCK`] elements at every width, and the host plans the sample
+//! stride with the device's *smallest* subgroup width (`g = 2·W_min`); a merge that runs with a
+//! wider subgroup takes larger steps, so the result does not depend on the width the driver
+//! picks (tested on the CPU).
+//!
+//! The merge step is software-pipelined ([`merge_piece`]): the next chunk and its run's next
+//! head are loaded while the current chunk is merged, so each step waits for one load, where the
+//! plain loop waited for the head and then for the chunk.
+use crate::coop::{Coop, SharedU32};
 
 /// Elements each lane holds in registers.
 pub const PER_LANE: u32 = 4;
-/// Every `SPLITTER_KEEP`-th sample (by rank in a pair's merged sample list) bounds a piece.
+/// Every `SPLITTER_KEEP`-th sample (by rank in a pair's merged sample list) bounds a piece: the
+/// largest keep [`splitter_keep`] picks.
 pub const SPLITTER_KEEP: u32 = 8;
-/// Invocations per workgroup of the cooperative kernels (block sort, merge); the subgroups per
-/// workgroup come from the built-ins.
+/// Pieces per merge level that [`splitter_keep`] aims for: enough subgroups to hide the merge
+/// steps' load latency on a large GPU.
+pub const TARGET_PIECES: u32 = 2048;
+
+/// The splitter keep for a sort of `n` elements with sample stride `2·min_width`: about
+/// [`TARGET_PIECES`] pieces per level (`n / (g·k)`), a power of two in `1..=SPLITTER_KEEP`.
+/// Measured on an NVIDIA H200 (uniform 30-bit keys, GPU ms for keep 1 / 2 / 4 / 8): 64k pairs
+/// 0.153 / 0.164 / 0.194 / 0.256, 1M 0.621 / 0.550 / 0.526 / 0.555, 4M 2.22 / 1.81 / 1.65 / 1.59,
+/// 16M 9.66 / 7.38 / 6.47 / 6.10. Smaller pieces put more subgroups to work while a level has
+/// few; each piece also pays one priming load, which costs more than it gains once the GPU is
+/// full.
+#[inline]
+pub fn splitter_keep(n: u32, min_width: u32) -> u32 {
+    let k = n / (sample_stride(min_width) * TARGET_PIECES);
+    if k >= SPLITTER_KEEP {
+        SPLITTER_KEEP
+    } else if k >= 1 {
+        1 << (31 - k.leading_zeros())
+    } else {
+        1
+    }
+}
+/// Invocations per workgroup of the merge; the subgroups per workgroup come from the built-ins.
 pub const BITONIC_WORKGROUP: u32 = 128;
 /// Invocations per workgroup of the splitter kernel (one invocation per sample).
 pub const SPLITTER_WORKGROUP: u32 = 256;
 /// Piece index of a sample that is not a kept splitter.
 pub const NO_PIECE: u32 = u32::MAX;
 
-/// Elements of the first sorted runs (the block sort's blocks) for a device whose narrowest
-/// subgroup is `min_width` lanes.
-#[inline]
-pub fn block_elems(min_width: u32) -> u32 {
-    PER_LANE * min_width
-}
+/// Invocations per workgroup of the block sort.
+pub const BLOCK_WORKGROUP: u32 = 256;
+/// Elements of the first sorted runs (the block sort's blocks): 1 024, whatever the subgroup
+/// width.
+pub const BLOCK: u32 = BLOCK_WORKGROUP * PER_LANE;
+/// Words of workgroup memory the block sort uses (keys and tags of a block).
+pub const BLOCK_SHARED_WORDS: usize = 2 * BLOCK as usize;
+const _: () = assert!(BLOCK_SHARED_WORDS <= crate::radix::RADIX_SHARED_WORDS, "the block sort shares the sort kernels' workgroup array");
+const _: () = assert!(BLOCK <= 1 << 31, "tags keep their top bit for the pad flag");
 
 /// Sample stride `g` of the splitters: one merge step (`t = 2·W`) of the narrowest subgroup.
 #[inline]
@@ -125,58 +159,129 @@ fn exchange_lanes<C: Coop>(c: &C, x: Lane4, mask: u32, ascending: u32) -> Lane4 
     let lower = c.lane() & mask == 0;
     let partner_pad = c.shuffle_xor(x.pad, mask);
     let mut y = x;
-    let mut j = 0;
-    while j < PER_LANE as usize {
-        let pk = c.shuffle_xor(x.k[j], mask);
-        let pv = c.shuffle_xor(x.v[j], mask);
+    unroll4!(j => {
+        let pk = c.shuffle_xor(x.k[j as usize], mask);
+        let pv = c.shuffle_xor(x.v[j as usize], mask);
         let (pp, mp) = ((partner_pad >> j) & 1, (x.pad >> j) & 1);
         let keep_min = lower == ((ascending >> j) & 1 != 0);
-        let take = if keep_min { less(pk, pp, x.k[j], mp) } else { less(x.k[j], mp, pk, pp) };
+        let take = if keep_min { less(pk, pp, x.k[j as usize], mp) } else { less(x.k[j as usize], mp, pk, pp) };
         if take {
-            y.k[j] = pk;
-            y.v[j] = pv;
+            y.k[j as usize] = pk;
+            y.v[j as usize] = pv;
             y.pad = (y.pad & !(1 << j)) | (pp << j);
         }
-        j += 1;
-    }
+    });
     y
 }
 
-/// Step 1: sorts the subgroup's `4·W` elements, lane-major (element `4·lane + j`), ascending,
-/// pads last. Subgroup-uniform; no barriers, no shared memory.
-pub fn block_sort<C: Coop>(c: &C, mut x: Lane4) -> Lane4 {
-    let m = PER_LANE * c.subgroup_size();
-    let lane = c.lane();
+/// Element `first + j` of the block is slot `j` of the invocation whose slot 0 is `first`:
+/// sets bit `j` of the result where that element's bitonic sequence of `size` ascends.
+#[inline]
+fn ascending_bits(first: u32, size: u32) -> u32 {
+    let mut asc = 0;
+    unroll4!(j => {
+        if (first + j) & size == 0 {
+            asc |= 1 << j;
+        }
+    });
+    asc
+}
+
+/// The pad flag rides in the top bit of a tag in workgroup memory.
+const TAG_PAD: u32 = 1 << 31;
+
+/// Compare-exchange of elements `e` and `e ^ d` across subgroups, through workgroup memory
+/// (keys at `[0, BLOCK)`, tags with the pad flag at `[BLOCK, 2·BLOCK)`). Workgroup-uniform.
+#[inline]
+fn exchange_shared<C: Coop, S: SharedU32 + ?Sized>(c: &C, sh: &mut S, x: Lane4, first: u32, size: u32, d: u32) -> Lane4 {
+    unroll4!(j => {
+        sh.store(first + j, x.k[j as usize]);
+        sh.store(BLOCK + first + j, x.v[j as usize] | (((x.pad >> j) & 1) * TAG_PAD));
+    });
+    c.workgroup_barrier();
+    let mut y = x;
+    unroll4!(j => {
+        let e = first + j;
+        let pk = sh.load(e ^ d);
+        let pt = sh.load(BLOCK + (e ^ d));
+        let (pp, mp) = (pt >> 31, (x.pad >> j) & 1);
+        let keep_min = (e & d == 0) == (e & size == 0);
+        let take = if keep_min { less(pk, pp, x.k[j as usize], mp) } else { less(x.k[j as usize], mp, pk, pp) };
+        if take {
+            y.k[j as usize] = pk;
+            y.v[j as usize] = pt & !TAG_PAD;
+            y.pad = (y.pad & !(1 << j)) | (pp << j);
+        }
+    });
+    c.workgroup_barrier();
+    y
+}
+
+/// Step 1: sorts the workgroup's block of [`BLOCK`] elements, ascending, pads last: the
+/// invocation of subgroup `s`, lane `l` holds elements `first = 4·(s·W + l) … first + 3`
+/// ([`block_first`]). Distances `d < 4` run in registers, `4 ≤ d < 4·W` with `shuffle_xor(d/4)`,
+/// `d ≥ 4·W` through workgroup memory ([`exchange_shared`]: 2 barriers each). With `W` = 32:
+/// 55 stages, 6 of them through memory. Workgroup-uniform. `x.v` is carried as a tag (the
+/// kernel sorts each element's position in the block and gathers the values afterwards), whose
+/// top bit must be clear.
+pub fn block_sort<C: Coop, S: SharedU32 + ?Sized>(c: &C, sh: &mut S, mut x: Lane4) -> Lane4 {
+    let sub = PER_LANE * c.subgroup_size();
+    let first = block_first(c);
     let mut size = 2;
-    while size <= m {
+    while size <= BLOCK {
         let mut d = size / 2;
         while d > 0 {
-            if d >= PER_LANE {
-                let mut asc = 0;
-                let mut j = 0;
-                while j < PER_LANE {
-                    if (PER_LANE * lane + j) & size == 0 {
-                        asc |= 1 << j;
-                    }
-                    j += 1;
-                }
-                x = exchange_lanes(c, x, d / PER_LANE, asc);
+            if d >= sub {
+                x = exchange_shared(c, sh, x, first, size, d);
+            } else if d >= PER_LANE {
+                x = exchange_lanes(c, x, d / PER_LANE, ascending_bits(first, size));
+            } else if d == 1 {
+                x = exchange_regs(x, 0, 1, first & size == 0);
+                x = exchange_regs(x, 2, 3, (first + 2) & size == 0);
             } else {
-                // Slot `j` meets `j ^ d`; direction from element `4·lane + j`.
-                let e = PER_LANE * lane;
-                if d == 1 {
-                    x = exchange_regs(x, 0, 1, e & size == 0);
-                    x = exchange_regs(x, 2, 3, (e + 2) & size == 0);
-                } else {
-                    x = exchange_regs(x, 0, 2, e & size == 0);
-                    x = exchange_regs(x, 1, 3, (e + 1) & size == 0);
-                }
+                x = exchange_regs(x, 0, 2, first & size == 0);
+                x = exchange_regs(x, 1, 3, (first + 1) & size == 0);
             }
             d /= 2;
         }
         size *= 2;
     }
     x
+}
+
+/// Step 1 for the block at `base` of an input of `count` elements: loads the invocation's
+/// elements (`key_of`), sorts the block with each element's position in it as its tag, and
+/// gathers the values of the sorted order (`value_of`). Returns the keys and values of block
+/// elements `block_first(c) + j` (those at or past `count` are not to be written). Ends with a
+/// barrier after every gather, so the caller may write the block in place. Workgroup-uniform.
+#[inline]
+pub fn sort_block<C: Coop, S: SharedU32 + ?Sized>(c: &C, sh: &mut S, base: u32, count: u32, key_of: impl Fn(u32) -> u32, value_of: impl Fn(u32) -> u32) -> ([u32; 4], [u32; 4]) {
+    let first = block_first(c);
+    let mut x = Lane4::pads();
+    unroll4!(j => {
+        let e = first + j;
+        if base + e < count {
+            x.k[j as usize] = key_of(base + e);
+            x.v[j as usize] = e;
+            x.pad &= !(1 << j);
+        }
+    });
+    x = block_sort(c, sh, x);
+    let mut v = [0u32; 4];
+    unroll4!(j => {
+        if (x.pad >> j) & 1 == 0 {
+            v[j as usize] = value_of(base + x.v[j as usize]);
+        }
+    });
+    c.workgroup_barrier();
+    (x.k, v)
+}
+
+/// The block element of an invocation's slot 0 in [`block_sort`]: subgroups hold consecutive
+/// `4·W` elements, lanes consecutive 4.
+#[inline]
+pub fn block_first<C: Coop>(c: &C) -> u32 {
+    PER_LANE * (c.subgroup_id() * c.subgroup_size() + c.lane())
 }
 
 /// Half-cleaners `d = M/2 … 1` on a bitonic buffer in column layout (`e = j·W + lane`): the
@@ -354,77 +459,109 @@ impl Store for [u32] {
     }
 }
 
-/// Loads `t` elements of one run into the slots `j ∈ {2·h, 2·h + 1}` (`h` = 0: lower half,
-/// ascending; `h` = 1: upper half, reversed). Positions at or past `end` become pads.
+/// `t = 2·W` consecutive elements of one run as a lane holds them (element `h·W + lane` in slot
+/// `h`, or reversed: element `t − 1 − (h·W + lane)`), pad bits `h` at or past the run's end; and
+/// the run's key right after the chunk, its next head (read with the chunk, so one load latency
+/// per merge step decides the next step too).
+#[derive(Clone, Copy)]
+struct Chunk {
+    k: [u32; 2],
+    v: [u32; 2],
+    pad: u32,
+    /// `keys[start + t]`, or `u32::MAX` at or past `end` (then unused: the run is exhausted).
+    head: u32,
+}
+
+/// The key at `i` of a run ending at `end`: [`Chunk::head`].
 #[inline]
-fn load_half<C: Coop>(c: &C, mut x: Lane4, keys: &[u32], values: &[u32], start: u32, end: u32, upper: bool) -> Lane4 {
+fn head_at(keys: &[u32], i: u32, end: u32) -> u32 {
+    if i < end { keys[i as usize] } else { u32::MAX }
+}
+
+#[inline]
+fn load_chunk<C: Coop>(c: &C, keys: &[u32], values: &[u32], start: u32, end: u32, reversed: bool) -> Chunk {
     let w = c.subgroup_size();
     let t = 2 * w;
-    let mut h = 0;
-    while h < 2 {
+    let mut x = Chunk { k: [u32::MAX; 2], v: [0; 2], pad: 0b11, head: head_at(keys, start + t, end) };
+    unroll2!(h => {
         let q = h * w + c.lane();
-        let src = if upper { start + t - 1 - q } else { start + q };
-        let j = (if upper { 2 } else { 0 } + h) as usize;
+        let src = if reversed { start + t - 1 - q } else { start + q };
         if src < end {
-            x.k[j] = keys[src as usize];
-            x.v[j] = values[src as usize];
-            x.pad &= !(1 << j);
-        } else {
-            x.k[j] = u32::MAX;
-            x.v[j] = 0;
-            x.pad |= 1 << j;
+            x.k[h as usize] = keys[src as usize];
+            x.v[h as usize] = values[src as usize];
+            x.pad &= !(1 << h);
         }
-        h += 1;
-    }
+    });
     x
 }
 
-/// Whether the next chunk comes from A: A's next element `ia` is smaller than B's next `ib`
-/// (or equal: A lies left of B), or B is exhausted.
-#[inline]
-fn take_a(keys: &[u32], p: &Piece, ia: u32, ib: u32) -> bool {
-    ia < p.a1 && (ib >= p.b1 || keys[ia as usize] <= keys[ib as usize])
+/// A piece's read positions and the keys there (its runs' heads).
+#[derive(Clone, Copy)]
+struct Cursor {
+    ia: u32,
+    ib: u32,
+    head_a: u32,
+    head_b: u32,
+}
+
+impl Cursor {
+    /// The next chunk, from A when A's head is smaller than B's (or equal: A lies left of B) or
+    /// B is exhausted; advances past it. `reversed`: for the upper half of the buffer.
+    #[inline]
+    fn next<C: Coop>(&mut self, c: &C, keys: &[u32], values: &[u32], p: &Piece, reversed: bool) -> Chunk {
+        let t = 2 * c.subgroup_size();
+        let take_a = self.ia < p.a1 && (self.ib >= p.b1 || self.head_a <= self.head_b);
+        if take_a {
+            let x = load_chunk(c, keys, values, self.ia, p.a1, reversed);
+            self.ia += t;
+            self.head_a = x.head;
+            x
+        } else {
+            let x = load_chunk(c, keys, values, self.ib, p.b1, reversed);
+            self.ib += t;
+            self.head_b = x.head;
+            x
+        }
+    }
 }
 
 /// Step 2b: merges one piece with one subgroup (see the module doc). Subgroup-uniform.
-/// Returns the number of merge steps (for tests of the loop bound).
+/// Software-pipelined: the chunk of step `s + 1` is chosen and its load issued before step `s`
+/// merges, so the merge network runs while the load is in flight (the chunks and their order are
+/// those of the plain loop: a choice depends only on the read positions, which change only when
+/// a chunk is read). Returns the number of merge steps (for tests of the loop bound).
 pub fn merge_piece<C: Coop, O: Store + ?Sized>(c: &C, keys: &[u32], values: &[u32], p: Piece, keys_out: &mut O, values_out: &mut O) -> u32 {
     let len = (p.a1 - p.a0) + (p.b1 - p.b0);
     if len == 0 {
         return 0;
     }
     let t = 2 * c.subgroup_size();
-    let (mut ia, mut ib) = (p.a0, p.b0);
-    let mut x = Lane4::pads();
-    // Prime the kept half from the run with the smaller head (A at equal keys).
-    if take_a(keys, &p, ia, ib) {
-        x = load_half(c, x, keys, values, ia, p.a1, false);
-        ia += t;
-    } else {
-        x = load_half(c, x, keys, values, ib, p.b1, false);
-        ib += t;
-    }
+    let mut cur = Cursor { ia: p.a0, ib: p.b0, head_a: head_at(keys, p.a0, p.a1), head_b: head_at(keys, p.b0, p.b1) };
+    // Prime the kept half from the run with the smaller head.
+    let first = cur.next(c, keys, values, &p, false);
+    let mut x = Lane4 { k: [first.k[0], first.k[1], u32::MAX, u32::MAX], v: [first.v[0], first.v[1], 0, 0], pad: first.pad | 0xC };
+    let mut pending = cur.next(c, keys, values, &p, true);
     let mut written = 0;
     let mut steps = 0;
     while written < len {
-        if take_a(keys, &p, ia, ib) {
-            x = load_half(c, x, keys, values, ia, p.a1, true);
-            ia += t;
-        } else {
-            x = load_half(c, x, keys, values, ib, p.b1, true);
-            ib += t;
+        let upper = pending;
+        if written + t < len {
+            pending = cur.next(c, keys, values, &p, true);
         }
+        x.k[2] = upper.k[0];
+        x.k[3] = upper.k[1];
+        x.v[2] = upper.v[0];
+        x.v[3] = upper.v[1];
+        x.pad = (x.pad & 0b11) | (upper.pad << 2);
         x = merge_bitonic(c, x);
-        let mut h = 0;
-        while h < 2 {
+        unroll2!(h => {
             let e = h * c.subgroup_size() + c.lane();
             if written + e < len {
                 let dst = p.out0 + written + e;
                 keys_out.store(dst, x.k[h as usize]);
                 values_out.store(dst, x.v[h as usize]);
             }
-            h += 1;
-        }
+        });
         // The upper half becomes the kept half.
         x = Lane4 { k: [x.k[2], x.k[3], u32::MAX, u32::MAX], v: [x.v[2], x.v[3], 0, 0], pad: (x.pad >> 2) | 0xC };
         written += t;
@@ -444,11 +581,11 @@ pub fn level_count(n: u32, run0: u32) -> u32 {
     levels
 }
 
-/// Merge level `index` (0: the first, run length `4·W_min`) of a sort of `n` elements planned
-/// for a narrowest subgroup of `min_width` lanes.
+/// Merge level `index` (0: the first, run length [`BLOCK`]) of a sort of `n` elements planned
+/// for a narrowest subgroup of `min_width` lanes, keeping every `keep`-th sample (≥ 1).
 #[inline]
-pub fn level(n: u32, min_width: u32, index: u32) -> Level {
-    Level { n, run: block_elems(min_width) << index, stride: sample_stride(min_width), keep: SPLITTER_KEEP }
+pub fn level(n: u32, min_width: u32, index: u32, keep: u32) -> Level {
+    Level { n, run: BLOCK << index, stride: sample_stride(min_width), keep }
 }
 
 #[cfg(not(target_arch = "spirv"))]

@@ -7,11 +7,17 @@ use crate::coop::cpu::{run_workgroups, Emulation};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The host's plan of a sort of `n` elements for a device whose narrowest subgroup is
-/// `min_width` lanes: the block size and the merge levels in order.
-pub fn plan(n: u32, min_width: u32) -> (u32, Vec<Level>) {
-    let run0 = block_elems(min_width);
-    let levels = (0..level_count(n, run0)).map(|l| level(n, min_width, l)).collect();
+/// `min_width` lanes, keeping every `keep`-th splitter sample: the block size and the merge
+/// levels in order.
+pub fn plan_with_keep(n: u32, min_width: u32, keep: u32) -> (u32, Vec<Level>) {
+    let run0 = BLOCK;
+    let levels = (0..level_count(n, run0)).map(|l| level(n, min_width, l, keep)).collect();
     (run0, levels)
+}
+
+/// [`plan_with_keep`] with [`SPLITTER_KEEP`].
+pub fn plan(n: u32, min_width: u32) -> (u32, Vec<Level>) {
+    plan_with_keep(n, min_width, SPLITTER_KEEP)
 }
 
 /// Output words shared by the emulated invocations (each index written once per dispatch).
@@ -31,33 +37,22 @@ fn plain(v: Vec<AtomicU32>) -> Vec<u32> {
     v.into_iter().map(AtomicU32::into_inner).collect()
 }
 
-/// Step 1 at subgroup width `width`: blocks of `run0 ≤ 4·width` elements sorted.
-pub fn block_sort_emulated(width: u32, run0: u32, keys: &[u32], values: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    assert!(run0 <= PER_LANE * width, "block of {run0} elements at width {width}");
+/// Step 1 at subgroup width `width`: blocks of [`BLOCK`] elements sorted, as the kernel does
+/// ([`sort_block`]).
+pub fn block_sort_emulated(width: u32, keys: &[u32], values: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let n = keys.len() as u32;
-    let emu = Emulation { width, workgroup_size: width, shared_words: 0 };
-    let lanes = run_workgroups(emu, n.div_ceil(run0), |block, c, _| {
-        let base = block * run0;
-        let mut x = Lane4::pads();
-        for j in 0..PER_LANE {
-            let e = PER_LANE * c.lane() + j;
-            if e < run0 && base + e < n {
-                x.k[j as usize] = keys[(base + e) as usize];
-                x.v[j as usize] = values[(base + e) as usize];
-                x.pad &= !(1 << j);
-            }
-        }
-        (base, block_sort(c, x))
+    let emu = Emulation { width, workgroup_size: BLOCK_WORKGROUP, shared_words: BLOCK_SHARED_WORDS };
+    let lanes = run_workgroups(emu, n.div_ceil(BLOCK), |block, c, sh| {
+        let base = block * BLOCK;
+        (base + block_first(c), sort_block(c, sh, base, n, |i| keys[i as usize], |i| values[i as usize]))
     });
     let (mut k, mut v) = (keys.to_vec(), values.to_vec());
-    for (i, (base, x)) in lanes.iter().enumerate() {
-        let lane = i as u32 % width;
+    for (first, (bk, bv)) in lanes {
         for j in 0..PER_LANE {
-            let e = PER_LANE * lane + j;
-            if e < run0 && base + e < n {
-                assert_eq!(x.pad >> j & 1, 0, "a pad sorted before a real element");
-                k[(base + e) as usize] = x.k[j as usize];
-                v[(base + e) as usize] = x.v[j as usize];
+            let i = (first + j) as usize;
+            if i < keys.len() {
+                k[i] = bk[j as usize];
+                v[i] = bv[j as usize];
             }
         }
     }
@@ -96,12 +91,17 @@ pub fn merge_emulated(width: u32, lv: &Level, boundaries: &[u32], keys: &[u32], 
 /// (`≤ width`; equal on devices with one subgroup size). Returns keys, values and the most merge
 /// steps one subgroup took.
 pub fn sort_emulated(width: u32, plan_width: u32, keys: &[u32], values: &[u32]) -> (Vec<u32>, Vec<u32>, u32) {
+    sort_emulated_with_keep(width, plan_width, SPLITTER_KEEP, keys, values)
+}
+
+/// [`sort_emulated`] keeping every `keep`-th splitter sample.
+pub fn sort_emulated_with_keep(width: u32, plan_width: u32, keep: u32, keys: &[u32], values: &[u32]) -> (Vec<u32>, Vec<u32>, u32) {
     assert!(plan_width <= width);
-    let (run0, levels) = plan(keys.len() as u32, plan_width);
+    let (_, levels) = plan_with_keep(keys.len() as u32, plan_width, keep);
     if keys.len() <= 1 {
         return (keys.to_vec(), values.to_vec(), 0);
     }
-    let (mut k, mut v) = block_sort_emulated(width, run0, keys, values);
+    let (mut k, mut v) = block_sort_emulated(width, keys, values);
     let mut max_steps = 0;
     for lv in &levels {
         let boundaries = if lv.split() { splitters_emulated(&k, lv) } else { vec![0; 2] };

@@ -7,8 +7,13 @@ const WIDTHS: [u32; 5] = [4, 8, 16, 32, 64];
 /// Sorts `keys` (values = indices) in the emulation and compares with `sort`: keys equal, and
 /// the (key, value) multiset equal.
 fn check(width: u32, plan_width: u32, keys: &[u32], what: &str) -> u32 {
+    check_keep(width, plan_width, SPLITTER_KEEP, keys, what)
+}
+
+/// [`check`] keeping every `keep`-th splitter sample.
+fn check_keep(width: u32, plan_width: u32, keep: u32, keys: &[u32], what: &str) -> u32 {
     let values: Vec<u32> = (0..keys.len() as u32).collect();
-    let (k, v, steps) = sort_emulated(width, plan_width, keys, &values);
+    let (k, v, steps) = sort_emulated_with_keep(width, plan_width, keep, keys, &values);
     let mut expected: Vec<(u32, u32)> = keys.iter().copied().zip(values).collect();
     expected.sort_unstable();
     let mut got: Vec<(u32, u32)> = k.iter().copied().zip(v).collect();
@@ -21,12 +26,12 @@ fn check(width: u32, plan_width: u32, keys: &[u32], what: &str) -> u32 {
 
 #[test]
 fn block_sort_sorts_every_block_at_all_widths() {
+    let m = BLOCK;
     for width in WIDTHS {
-        let m = PER_LANE * width;
-        for n in [1, 2, 3, m - 1, m, m + 1, 3 * m + 5] {
+        for n in [1, 2, 3, 5, m - 1, m, m + 1, 3 * m + 5] {
             for (what, keys) in inputs(n as usize, n + width) {
                 let values: Vec<u32> = (0..n).collect();
-                let (k, v) = block_sort_emulated(width, m, &keys, &values);
+                let (k, v) = block_sort_emulated(width, &keys, &values);
                 for (b, chunk) in k.chunks(m as usize).enumerate() {
                     assert!(chunk.windows(2).all(|w| w[0] <= w[1]), "{what}: block {b} at width {width}");
                 }
@@ -40,15 +45,30 @@ fn block_sort_sorts_every_block_at_all_widths() {
     }
 }
 
+/// A real key `u32::MAX` in a partial block is never mistaken for padding: its value survives.
+#[test]
+fn block_sort_keeps_real_max_keys_of_a_partial_block() {
+    for width in [4, 32] {
+        let keys: Vec<u32> = (0..300).map(|i| if i % 3 == 0 { u32::MAX } else { i * 7919 % 1000 }).collect();
+        let values: Vec<u32> = (0..300).collect();
+        let (k, v) = block_sort_emulated(width, &keys, &values);
+        let mut got: Vec<(u32, u32)> = k.into_iter().zip(v).collect();
+        let mut expected: Vec<(u32, u32)> = keys.into_iter().zip(values).collect();
+        got.sort_unstable();
+        expected.sort_unstable();
+        assert_eq!(got, expected, "width {width}");
+    }
+}
+
 /// The splitter pieces of every split level partition the merged run (∀a∈S_i, b∈S_j, i<j ⇒
 /// a ≤ b), cover it exactly, and hold at most `(k+2)·g − 2` elements — duplicates included.
 #[test]
 fn splitter_pieces_partition_each_pair_within_the_bound() {
     let mut split_levels = 0;
-    for (n, min_width) in [(5000u32, 4u32), (4099, 8), (20_000, 8), (9000, 32)] {
+    for (n, min_width, keep) in [(9000u32, 4u32, SPLITTER_KEEP), (4099, 8, SPLITTER_KEEP), (20_000, 8, SPLITTER_KEEP), (40_000, 32, SPLITTER_KEEP), (5000, 4, 1), (4099, 8, 2), (9000, 32, 4)] {
         for (what, keys) in inputs(n as usize, n) {
             // Sorted runs of every level: sort each run of the input.
-            let (_, levels) = plan(n, min_width);
+            let (_, levels) = plan_with_keep(n, min_width, keep);
             for lv in levels.iter().filter(|lv| lv.split()) {
                 split_levels += 1;
                 let mut k = keys.clone();
@@ -97,6 +117,38 @@ fn splitter_pieces_partition_each_pair_within_the_bound() {
         }
     }
     assert!(split_levels > 20, "the cases must reach split levels ({split_levels})");
+}
+
+/// Every splitter keep (the host may pick it per device and size) sorts, and no subgroup merges
+/// more than `keep + 2` steps (a piece holds at most `(k+2)·g − 2` elements, `g` one step).
+#[test]
+fn every_splitter_keep_sorts_within_its_step_bound() {
+    for keep in [1, 2, 4] {
+        for width in [4, 8, 32] {
+            let piece = (keep * sample_stride(width)) as usize;
+            let block = BLOCK as usize;
+            for n in [100, 2 * block + 1, 5 * block + 3 * piece + 7] {
+                for (what, keys) in inputs(n, n as u32) {
+                    let steps = check_keep(width, width, keep, &keys, what);
+                    assert!(steps <= keep + 2, "{what}, n = {n}, width {width}, keep {keep}: {steps} merge steps");
+                }
+            }
+        }
+    }
+}
+
+/// The measured rule: keep 1 at 64k pairs, 4 at 1M, 8 from 4M on (W = 32); powers of two.
+#[test]
+fn splitter_keep_grows_with_the_input() {
+    assert_eq!([64_000, 1_000_000, 4_000_000, 16_000_000].map(|n| splitter_keep(n, 32)), [1, 4, 8, 8]);
+    for w in [4, 8, 16, 32, 64] {
+        let mut last = 0;
+        for n in (0..32).map(|b| 1u32 << b) {
+            let k = splitter_keep(n, w);
+            assert!(k.is_power_of_two() && k <= SPLITTER_KEEP && k >= last, "n = {n}, width {w}: keep {k}");
+            last = k;
+        }
+    }
 }
 
 // The acceptance matrix (lengths × shapes × widths 4–64, 2^20 included) is

@@ -360,10 +360,11 @@ pub fn radix_sort_tile(
     radix::store_items(slots, p.count, &v, |i, x| values[i as usize] = x);
 }
 
-/// Bitonic sort step 1 ([`crate::bitonic`]): subgroup `s` (global) sorts elements
-/// `[s·run, (s+1)·run)` in registers; writes in place or to the scratch pair (`p.in_place`).
-/// Each lane writes exactly the slots it read, so in place is race-free.
-#[spirv(compute(threads(128)))]
+/// Bitonic sort step 1 ([`crate::bitonic`]): workgroup `b` sorts elements
+/// `[b·BLOCK, (b+1)·BLOCK)` (each element's position in the block rides along as its tag; the
+/// values are gathered by it afterwards) and writes them in place or to the scratch pair
+/// (`p.in_place`). A workgroup writes exactly the block it read, after every gather.
+#[spirv(compute(threads(256)))]
 #[allow(clippy::too_many_arguments)]
 pub fn bitonic_block_sort(
     #[spirv(workgroup_id)] wg: UVec3,
@@ -378,40 +379,27 @@ pub fn bitonic_block_sort(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] values: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] keys_out: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] values_out: &mut [u32],
+    #[spirv(workgroup)] shared: &mut [u32; radix::RADIX_SHARED_WORDS],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let block = subgroup_item(&c, wg, nwg);
-    let base = block * p.run;
+    let base = (wg.y * nwg.x + wg.x) * bitonic::BLOCK;
     if base >= p.count {
         return;
     }
-    let mut x = bitonic::Lane4::pads();
-    let mut j = 0;
-    while j < bitonic::PER_LANE {
-        let e = bitonic::PER_LANE * lane + j;
-        if e < p.run && base + e < p.count {
-            x.k[j as usize] = keys[(base + e) as usize];
-            x.v[j as usize] = values[(base + e) as usize];
-            x.pad &= !(1 << j);
-        }
-        j += 1;
-    }
-    x = bitonic::block_sort(&c, x);
-    let mut j = 0;
-    while j < bitonic::PER_LANE {
-        let e = bitonic::PER_LANE * lane + j;
-        if e < p.run && base + e < p.count {
-            let i = (base + e) as usize;
+    let (k, v) = bitonic::sort_block(&c, shared, base, p.count, |i| keys[i as usize], |i| values[i as usize]);
+    let first = bitonic::block_first(&c);
+    unroll4!(j => {
+        let i = base + first + j;
+        if i < p.count {
             if p.in_place != 0 {
-                keys[i] = x.k[j as usize];
-                values[i] = x.v[j as usize];
+                keys[i as usize] = k[j as usize];
+                values[i as usize] = v[j as usize];
             } else {
-                keys_out[i] = x.k[j as usize];
-                values_out[i] = x.v[j as usize];
+                keys_out[i as usize] = k[j as usize];
+                values_out[i as usize] = v[j as usize];
             }
         }
-        j += 1;
-    }
+    });
 }
 
 /// Bitonic sort step 2a: one invocation per sample slot of the level; kept splitters write

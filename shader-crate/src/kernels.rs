@@ -121,10 +121,11 @@ pub const FORWARD_PLUS_CULL: [Kernel<TiledParams>; 2] = [
     Kernel::new("forward_plus::forward_plus_cull_array", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
 ];
 
-// Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): block sort and merge give each subgroup
-// a block / piece (cooperative); the splitters are one invocation per sample.
+// Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): the block sort gives each workgroup a
+// block, the merge each subgroup a piece (both cooperative); the splitters are one invocation
+// per sample.
 pub const BITONIC_BLOCK_SORT: Kernel<BitonicParams> =
-    Kernel::new("entries::bitonic_block_sort", 4, [crate::bitonic::BITONIC_WORKGROUP, 1, 1], true);
+    Kernel::new("entries::bitonic_block_sort", 4, [crate::bitonic::BLOCK_WORKGROUP, 1, 1], true);
 pub const BITONIC_SPLITTERS: Kernel<BitonicParams> =
     Kernel::new("entries::bitonic_splitters", 2, [crate::bitonic::SPLITTER_WORKGROUP, 1, 1], false);
 pub const BITONIC_MERGE: Kernel<BitonicParams> =

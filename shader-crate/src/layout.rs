@@ -437,7 +437,7 @@ const _: () = assert!(core::mem::size_of::<ForwardParams>() <= MAX_PUSH_CONSTANT
 pub struct BitonicParams {
     /// Elements to sort.
     pub count: u32,
-    /// Block sort: elements per block (`≤ 4·W`); splitters / merge: run length of the level.
+    /// Splitters / merge: run length of the level (the block sort's blocks are `bitonic::BLOCK`).
     pub run: u32,
     /// Sample stride `g` of the splitters.
     pub stride: u32,

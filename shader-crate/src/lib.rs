@@ -36,8 +36,28 @@
 // bad input to a defined result; `clamp`/`contains` would change that (and `f32::clamp` asserts).
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::manual_clamp, clippy::manual_range_contains)]
 
-/// Runs `$body` eight times with `$u` = 0..8 as straight-line code (no loop, no closure:
-/// rust-gpu cannot legalise closures capturing other closures mutably).
+/// Runs `$body` four times with `$u` = 0..4 as straight-line code (no loop, no closure:
+/// rust-gpu cannot legalise closures capturing other closures mutably). Register arrays indexed
+/// only by these constants stay in registers; a loop index would leave them in addressable
+/// (function-local) memory unless the driver unrolls the loop itself.
+macro_rules! unroll4 {
+    ($u:ident => $body:block) => {{
+        { let $u = 0u32; $body }
+        { let $u = 1u32; $body }
+        { let $u = 2u32; $body }
+        { let $u = 3u32; $body }
+    }};
+}
+
+/// As [`unroll4`], twice.
+macro_rules! unroll2 {
+    ($u:ident => $body:block) => {{
+        { let $u = 0u32; $body }
+        { let $u = 1u32; $body }
+    }};
+}
+
+/// As [`unroll4`], eight times.
 macro_rules! unroll8 {
     ($u:ident => $body:block) => {{
         { let $u = 0u32; $body }

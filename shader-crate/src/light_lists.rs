@@ -11,7 +11,7 @@
 //! * [`lights_meeting`] — the lights passing a test, in index order, [`LIGHTS_PER_ITERATION`] per
 //!   loop iteration (naive clustered assignment; the brute-force heatmap).
 //! * [`MAX_LIGHTS_PER_INVOCATION_LLVMPIPE`] — llvmpipe's loop limiter as a light count.
-use crate::coop::{ballot_count, Coop};
+use crate::coop::{ballot_count, ballot_first, Coop};
 use crate::layout::PointLight;
 use crate::scan::subgroup_inclusive_scan;
 use glam::Vec3;
@@ -119,15 +119,7 @@ pub fn subgroup_reserve<C: Coop, A: AtomicAdd + ?Sized>(c: &C, counter: &mut A, 
     if ballot_count(want) == 0 {
         return 0;
     }
-    let mut leader = 0;
-    let mut w = 0;
-    while w < 4 {
-        if want[w as usize] != 0 {
-            leader = 32 * w + want[w as usize].trailing_zeros();
-            break;
-        }
-        w += 1;
-    }
+    let leader = ballot_first(want);
     let inclusive = subgroup_inclusive_scan(c, n);
     let total = c.shuffle(inclusive, c.subgroup_size() - 1);
     let mut base = 0;

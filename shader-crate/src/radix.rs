@@ -170,6 +170,30 @@ impl Slots {
     }
 }
 
+/// Of the lanes whose digit `d` equals this lane's (its peers, found by one ballot per digit
+/// bit): the lowest (the leader), how many lie below this lane, and how many there are.
+/// Subgroups of up to 32 lanes work on the ballots' first word alone (a quarter of the mask
+/// arithmetic per bit); wider ones on all four. Subgroup-uniform.
+#[inline]
+fn peer_rank<C: Coop>(c: &C, d: u32, bits: u32) -> (u32, u32, u32) {
+    let width = c.subgroup_size();
+    if width <= 32 {
+        let mut same = if width == 32 { u32::MAX } else { (1u32 << width) - 1 };
+        let mut b = 0;
+        while b < bits {
+            let set = (d >> b) & 1 == 1;
+            let m = c.ballot(set)[0];
+            same &= if set { m } else { !m };
+            b += 1;
+        }
+        let below = (1u32 << c.lane()) - 1;
+        (same.trailing_zeros(), (same & below).count_ones(), same.count_ones())
+    } else {
+        let same = peers(c, d, bits);
+        (ballot_first(same), ballot_rank(same, c.lane()), ballot_count(same))
+    }
+}
+
 /// The lanes of the subgroup whose `d` equals this lane's, from one ballot per digit bit.
 #[inline]
 fn peers<C: Coop>(c: &C, d: u32, bits: u32) -> [u32; 4] {
@@ -206,13 +230,12 @@ pub fn rank_tile<C: Coop, S: SharedU32 + ?Sized>(c: &C, sh: &mut S, slots: Slots
         if round == slots.round {
             unroll8!(j => {
                 let d = digit(keys[j as usize], shift, bits);
-                let same = peers(c, d, bits);
-                let leader = ballot_first(same);
+                let (leader, below, count) = peer_rank(c, d, bits);
                 let mine = if lane == leader { sh.load(row + d) } else { 0 };
                 let before = c.shuffle(mine, leader);
-                rank[j as usize] = before + ballot_rank(same, lane);
+                rank[j as usize] = before + below;
                 if lane == leader {
-                    sh.store(row + d, before + ballot_count(same));
+                    sh.store(row + d, before + count);
                 }
                 c.subgroup_barrier();
             });

@@ -16,7 +16,7 @@
 //!   multiset must be unchanged.
 //!
 //! The same lengths and shapes run on the GPU (lavapipe, and the H100) in `tests/sort.rs`.
-use crate::bitonic::{block_elems, emulated::sort_emulated as bitonic_sort, sample_stride, SPLITTER_KEEP};
+use crate::bitonic::{emulated::sort_emulated as bitonic_sort, sample_stride, BLOCK, SPLITTER_KEEP};
 use crate::radix::chained::emulated::{sort_chained_emulated, Order, Schedule};
 use crate::radix::{emulated::sort_emulated as radix_sort, RADIX_TILE};
 pub use crate::sort_inputs::shapes as inputs;
@@ -79,7 +79,7 @@ fn partition_lengths(sorter: Sorter, width: u32) -> Vec<usize> {
             lengths.extend(RADIX_TILE as usize..=2 * RADIX_TILE as usize + 1);
         }
         Sorter::Bitonic => {
-            let block = block_elems(width) as usize;
+            let block = BLOCK as usize;
             let piece = (SPLITTER_KEEP * sample_stride(width)) as usize;
             lengths.extend(block..=2 * block + 1);
             lengths.extend(piece..=2 * piece + 1);

@@ -102,8 +102,7 @@ impl<const N: usize> SharedU32 for [u32; N] {
 #[inline]
 pub fn ballot_rank(mask: [u32; 4], lane: u32) -> u32 {
     let mut n = 0;
-    let mut w = 0;
-    while w < 4 {
+    unroll4!(w => {
         let lo = w * 32;
         let bits = if lane >= lo + 32 {
             mask[w as usize]
@@ -113,8 +112,7 @@ pub fn ballot_rank(mask: [u32; 4], lane: u32) -> u32 {
             0
         };
         n += bits.count_ones();
-        w += 1;
-    }
+    });
     n
 }
 
@@ -122,8 +120,7 @@ pub fn ballot_rank(mask: [u32; 4], lane: u32) -> u32 {
 #[inline]
 pub fn subgroup_lanes(width: u32) -> [u32; 4] {
     let mut m = [0u32; 4];
-    let mut w = 0;
-    while w < 4 {
+    unroll4!(w => {
         let lo = w * 32;
         m[w as usize] = if width >= lo + 32 {
             u32::MAX
@@ -132,8 +129,7 @@ pub fn subgroup_lanes(width: u32) -> [u32; 4] {
         } else {
             0
         };
-        w += 1;
-    }
+    });
     m
 }
 
