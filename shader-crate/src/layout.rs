@@ -448,3 +448,64 @@ pub struct BitonicParams {
     pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<BitonicParams>() == 32);
+
+// ─── Order-independent transparency ──────────────────────────────────────────────────────────
+
+/// End of a per-pixel fragment list: the cleared value of every head, `next` of a list's last
+/// node. Any index `≥ OitParams::capacity` ends a walk too (`oit::walk`).
+pub const OIT_END: u32 = u32::MAX;
+
+/// `OitParams::variant`: how a pixel's transparent fragments are resolved (`crate::oit`).
+/// Every fragment sorted, back to front, over the opaque colour (exact up to
+/// `oit::MAX_EXACT_LAYERS` layers per pixel).
+pub const OIT_EXACT: u32 = 0;
+/// The `k` nearest sorted over an order-independent average of the others.
+pub const OIT_K_NEAREST: u32 = 1;
+/// Weighted blended OIT (McGuire & Bavoil 2013): no sorting at all.
+pub const OIT_WEIGHTED: u32 = 2;
+
+/// One transparent fragment in a per-pixel linked list (Yang et al. 2010): 16 B, one 128-bit load.
+/// ```text
+///  word 0  colour   31      24 23      16 15       8 7        0
+///                  ┌──────────┬──────────┬──────────┬──────────┐
+///                  │  A = α   │  B·α     │  G·α     │  R·α     │  packUnorm4x8 of premultiplied
+///                  └──────────┴──────────┴──────────┴──────────┘  linear RGBA (R in the low byte)
+///  word 1  depth    f32 bits of the reversed-Z depth z_buf = near/d, clamped to [0, 1]
+///                   (1 = near plane, 0 = infinitely far): as u32, larger = nearer
+///  word 2  next     node index of the fragment inserted before it at this pixel, or OIT_END
+///  word 3  tie      frame-unique id of the fragment's primitive: orders fragments of equal depth
+/// ```
+/// The colour is premultiplied (`oit` module docs, "Why premultiplied"): tonemapped linear RGB
+/// (display-referred, before the sRGB encoding) times α, and α.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct OitNode {
+    pub colour: u32,
+    pub depth: u32,
+    pub next: u32,
+    pub tie: u32,
+}
+const _: () = assert!(core::mem::size_of::<OitNode>() == 16);
+
+/// Push constants of the transparency passes (list building and resolve).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct OitParams {
+    /// Nodes the node buffer holds: fragments whose counter value is at or past it are not
+    /// stored (the host grows the buffer to the counter and re-runs the frame).
+    pub capacity: u32,
+    /// Heads: one per pixel, `py · width + px`.
+    pub width: u32,
+    pub height: u32,
+    /// One of `OIT_*`.
+    pub variant: u32,
+    /// `OIT_K_NEAREST`: fragments kept sorted (1, 2, 4 or 8; `oit::MAX_K`).
+    pub k: u32,
+    /// Near-plane distance: view depth `near / z_buf` of a node (the weights of `OIT_WEIGHTED`).
+    pub near: f32,
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(core::mem::size_of::<OitParams>() == 32);
+const _: () = assert!(core::mem::size_of::<OitParams>() <= MAX_PUSH_CONSTANT_BYTES);

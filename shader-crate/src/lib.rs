@@ -18,6 +18,8 @@
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 //! * [`lighting`] — culling tests, falloff, BRDF, tonemapping and output encoding.
+//! * [`oit`] — order-independent transparency: per-pixel linked lists (list building, exact and
+//!   k-nearest resolves) and weighted blended OIT.
 //!
 //! Shared by the techniques (each technique module imports only these, never a sibling):
 //! * [`shading`] — shading I/O: pixel index, surface fetch, the light-list shading loop (the
@@ -97,6 +99,7 @@ pub mod light_lists;
 pub mod lighting;
 pub mod morton;
 pub mod octahedral;
+pub mod oit;
 pub mod page_table;
 pub mod radix;
 #[cfg(feature = "graphics")]

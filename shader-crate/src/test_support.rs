@@ -1,7 +1,7 @@
 //! Fixtures shared by the CPU tests of several modules: a seeded generator, grids, a synthetic
 //! G-buffer with lights around it, the brute-force reference pixel, frame parameters and a
 //! counter that counts its atomics. Used by the tests of `tile_cull`, `tiled`, `forward_plus`,
-//! `clustered_aabb`, `light_lists` and `shading`.
+//! `clustered_aabb`, `light_lists`, `shading` and `oit`.
 use crate::layout::*;
 use crate::light_lists::AtomicAdd;
 use crate::lighting::{self, light_touches};
