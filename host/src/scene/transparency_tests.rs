@@ -262,9 +262,10 @@ fn flatten_carries_the_opacity() {
     assert!(gpu.iter().any(|&o| o < 1.0));
 }
 
-/// Sponza's MTL says `d 0` on 22 opaque materials: the built-in reads them as opaque.
+/// Sponza's MTL says `d 0` on 22 opaque materials: the built-in reads them as opaque, and the
+/// curtains variant makes exactly its three curtain materials translucent, in view of its camera.
 #[test]
-fn sponza_stays_opaque() {
+fn sponza_stays_opaque_and_its_curtains_variant_is_translucent() {
     let Some(dir) = shared_assets::asset("sponza") else { return };
     let path = dir.join("sponza.mtl");
     let text = std::fs::read(&path).unwrap();
@@ -273,4 +274,14 @@ fn sponza_stays_opaque() {
     let s = Scene::load("sponza", &assets()).unwrap();
     assert!(s.materials.iter().all(|m| m.opacity == 1.0) && !s.has_transparency());
     assert!(!Scene::load("sponza@column", &assets()).unwrap().has_transparency());
+
+    let curtains = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/sponza-curtains.toml"));
+    let c = Scene::load(curtains.to_str().unwrap(), &assets()).unwrap();
+    assert!(c.has_transparency() && c.warnings.is_empty());
+    let mut translucent: Vec<(&str, f32)> = c.materials.iter().filter(|m| m.is_transparent()).map(|m| (m.name.as_str(), m.opacity)).collect();
+    translucent.sort_by(|a, b| a.0.cmp(b.0));
+    assert_eq!(translucent, [("fabric_c", 0.6), ("fabric_f", 0.55), ("fabric_g", 0.65)]);
+    // The centre pixel looks through a curtain onto the arcade behind it.
+    let (panes, _, opaque) = look_through(&c, c.camera.position, pixel_ray(&c.camera, 1920, 1080, 960, 540));
+    assert!(panes >= 1 && opaque.is_some(), "{panes} curtain layers in front of {opaque:?}");
 }
