@@ -134,7 +134,7 @@ impl Drop for Workspace {
 /// Whether an error message says where: a line, a key, or the item of the scene at fault.
 fn names_a_place(msg: &str) -> bool {
     let line = msg.match_indices(" line ").any(|(i, _)| msg[i + 6..].starts_with(|c: char| c.is_ascii_digit()));
-    let keys = ["geometry", "name", "camera", "lights", "light[", "[[light]]", "effects", "distribution", "count"];
+    let keys = ["geometry", "name", "camera", "lights", "light[", "[[light]]", "material[", "mtl_d_zero_is_opaque", "effects", "distribution", "count"];
     let items = ["not found", "cannot read", "mesh ", "light ", "material ", "texture ", "spans ", "triangle", "materials"];
     line || keys.iter().chain(&items).any(|k| msg.contains(k))
 }
@@ -157,7 +157,7 @@ fn check_scene(s: &Scene) -> Result<(), String> {
     }
     for m in &s.materials {
         let unit = |v: f32| (0.0..=1.0).contains(&v);
-        if !(m.albedo.iter().all(|&v| unit(v)) && unit(m.specular) && m.roughness > 0.0 && m.roughness <= 1.0) {
+        if !(m.albedo.iter().all(|&v| unit(v)) && unit(m.specular) && unit(m.opacity) && m.roughness > 0.0 && m.roughness <= 1.0) {
             return Err(format!("material out of range: {m:?}"));
         }
     }

@@ -56,6 +56,18 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     }
 }
 
+/// The glass scene through its stack (24 overlapping panes per pixel, drawn opaque until the
+/// renderer has a transparent pass) renders like any other.
+#[test]
+fn glass_stack_equals_the_reference() {
+    let gpu = common::gpu();
+    let scene = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(scene.has_transparency());
+    let l = lights::uniform(&scene, 1_000, 29).unwrap();
+    let f = assert_equal_to_reference(&gpu, &scene, &l, 96, 54, "glass@stack");
+    assert!(lit(&f.pixels) * 4 > f.pixels.len(), "glass@stack: the frame should be mostly lit");
+}
+
 /// More lights than one lavapipe loop may iterate (65 535): the chunked light loops must still
 /// visit every light (lavapipe's loop limiter once cut them off silently).
 #[test]

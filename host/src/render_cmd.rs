@@ -24,8 +24,8 @@ pub const MAX_FRAMES: u32 = 100_000;
 /// Arguments of `render` (see `manylights render --help`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Built-in scene (city, corridor, sponza, bunny; `name@view` for a named camera view:
-    /// city@corner, sponza@column), a .toml description or an .obj file.
+    /// Built-in scene (city, corridor, glass, sponza, bunny; `name@view` for a named camera view:
+    /// city@corner, sponza@column, glass@stack), a .toml description or an .obj file.
     #[arg(long, default_value = "city")]
     pub scene: String,
     /// Point lights to generate (when the scene description does not give them).

@@ -230,7 +230,9 @@ pub const MAX_MATERIALS: u32 = 256;
 pub struct MaterialGpu {
     pub specular: f32,
     pub roughness: f32,
-    pub _pad: [f32; 2],
+    /// In [0, 1], 1 opaque. No kernel reads it yet: every surface is shaded opaque.
+    pub opacity: f32,
+    pub _pad: f32,
 }
 const _: () = assert!(core::mem::size_of::<MaterialGpu>() == 16);
 

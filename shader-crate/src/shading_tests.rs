@@ -11,7 +11,7 @@ fn surfaces(rng: &mut Rng) -> (Vec<Surface>, Vec<PointLight>) {
     let g = grid(40, 24, 16);
     let gb = gbuffer(&g, rng);
     let lights = test_lights(&g, rng, 300, 0);
-    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] }, MaterialGpu { specular: 0.7, roughness: 0.3, _pad: [0.0; 2] }];
+    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, opacity: 1.0, _pad: 0.0 }, MaterialGpu { specular: 0.7, roughness: 0.3, opacity: 1.0, _pad: 0.0 }];
     let p = frame_params(g, lights.len() as u32);
     let s = (0..g.width * g.height)
         .filter(|&i| !reconstruct::is_background(gb.depth[i as usize]))
@@ -163,7 +163,7 @@ fn a_list_in_parts_sums_like_one_list() {
 #[test]
 fn fetch_surface_decodes_the_gbuffer() {
     let g = grid(8, 4, 16);
-    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] }, MaterialGpu { specular: 0.25, roughness: 0.5, _pad: [0.0; 2] }];
+    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, opacity: 1.0, _pad: 0.0 }, MaterialGpu { specular: 0.25, roughness: 0.5, opacity: 1.0, _pad: 0.0 }];
     let n = [0.36f32, 0.48, 0.8];
     for precision in [PRECISION_OCT8, PRECISION_OCT12, PRECISION_OCT16, PRECISION_F32] {
         let prec = octahedral::Precision::from_u32(precision);

@@ -12,7 +12,7 @@ use crate::test_support::{frame_params, gbuffer, grid, reference_pixel, test_lig
 /// more lights than [`LIST_CAPACITY`].
 #[test]
 fn emulated_tiles_equal_brute_force() {
-    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] }, MaterialGpu { specular: 0.7, roughness: 0.3, _pad: [0.0; 2] }];
+    let materials = [MaterialGpu { specular: 0.0, roughness: 1.0, opacity: 1.0, _pad: 0.0 }, MaterialGpu { specular: 0.7, roughness: 0.3, opacity: 1.0, _pad: 0.0 }];
     for (w, h, t, width, mode) in [(40, 24, 16, 4, MODE_TILED), (40, 24, 16, 8, MODE_TILED_25D), (37, 20, 32, 16, MODE_TILED_25D), (20, 12, 8, 32, MODE_TILED), (33, 17, 16, 64, MODE_TILED_25D)] {
         let g = grid(w, h, t);
         let bounds = slice_bounds(&g);

@@ -16,12 +16,13 @@ pub const NUMBERS: &[&str] = &[
 /// Format words, separators, odd bytes and paths (devices, missing files, escapes).
 pub const TOKENS: &[&str] = &[
     "\n", "\r\n", "\r", " ", "\t", "#", "/", "//", "\\", "\0", "\u{feff}", "\u{ff}", "é", "v", "vt", "vn", "f", "o", "g", "s", "l",
-    "usemtl", "mtllib", "newmtl", "Kd", "Ks", "Ns", "d", "map_Kd", "map_d", "-bm", "geometry", "name", "[camera]", "[lights]",
-    "[[light]]", "[effects]", "position", "target", "up", "fov_y", "near", "far", "count", "distribution", "seed", "radius",
-    "intensity", "clusters", "offset", "colour", "specular", "textures", "alpha_test", "uniform", "hotspots", "surfaces", "city",
-    "corridor", "sponza", "bunny", "=", "\"", "'", "[", "]", "{", "}", ",", "true", "/dev/zero", "/dev/urandom", "/proc/self/mem",
-    "../", "missing.png", "missing.mtl", "../textures/albedo.png", "../textures/truncated.png", "../obj/cube.obj", "/dev/zero.obj",
-    "../mtl/valid.mtl", "fuzz-input.obj", "fuzz-input.toml",
+    "usemtl", "mtllib", "newmtl", "Kd", "Ks", "Ns", "d", "Tr", "-halo", "illum", "map_Kd", "map_d", "-bm", "geometry", "name",
+    "[camera]", "[lights]", "[[light]]", "[[material]]", "opacity", "albedo", "mtl_d_zero_is_opaque", "[effects]", "position",
+    "target", "up", "fov_y", "near", "far", "count", "distribution", "seed", "radius", "intensity", "clusters", "offset", "colour",
+    "specular", "textures", "alpha_test", "uniform", "hotspots", "surfaces", "city", "corridor", "glass", "sponza", "bunny", "=",
+    "\"", "'", "[", "]", "{", "}", ",", "true", "/dev/zero", "/dev/urandom", "/proc/self/mem", "../", "missing.png", "missing.mtl",
+    "../textures/albedo.png", "../textures/truncated.png", "../obj/cube.obj", "/dev/zero.obj", "../mtl/valid.mtl",
+    "fuzz-input.obj", "fuzz-input.toml",
 ];
 
 /// A choice among `len` things, shrinking towards the first.

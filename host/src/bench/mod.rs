@@ -63,7 +63,7 @@ pub struct BenchArgs {
     /// Techniques: `all` or a comma-separated list (`manylights render --help` names them).
     #[arg(long, default_value = "all")]
     pub techniques: String,
-    /// Scenes (`city`, `sponza`, `corridor`, `bunny` or a path; `name@view` for a named camera
+    /// Scenes (`city`, `sponza`, `corridor`, `glass`, `bunny` or a path; `name@view` for a named camera
     /// view, e.g. `city@corner`, `sponza@column` with large depth discontinuities), comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = ["city".to_string(), "sponza".to_string(), "sponza@column".to_string()])]
     pub scenes: Vec<String>,

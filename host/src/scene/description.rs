@@ -1,9 +1,12 @@
-//! TOML scene descriptions: geometry plus an optional camera, lights and effect overrides.
+//! TOML scene descriptions: geometry plus an optional camera, lights, material and effect
+//! overrides.
 //!
 //! ```toml
 //! name = "my scene"               # optional: the file's stem otherwise
-//! geometry = "city"               # city | corridor | sponza | bunny | an .obj path (relative
-//!                                 # to this file)
+//! geometry = "city"               # city | corridor | glass | sponza | bunny | an .obj path
+//!                                 # (relative to this file)
+//! mtl_d_zero_is_opaque = true     # OBJ geometry only, optional: read the MTL's `d 0` as opaque
+//!                                 # (an exporter artefact; default true for sponza, else false)
 //! [camera]                        # optional: the geometry's default camera otherwise
 //! position = [0, 2, 0]
 //! target = [0, 2, -10]
@@ -25,6 +28,11 @@
 //! radius = 8
 //! colour = [1, 0.8, 0.6]          # optional, default white
 //! intensity = 20                  # optional, default: lights.rs rule for the radius
+//! [[material]]                    # optional, repeatable: override a material of the geometry
+//! name = "fabric_c"               # every material of that name (exact, case-sensitive)
+//! opacity = 0.6                   # optional, in [0, 1] (1 opaque)
+//! albedo = [0.8, 0.1, 0.1]        # optional, linear RGB in [0, 1] (replaces Kd; multiplies
+//!                                 # the albedo texture where there is one)
 //! [effects]                       # optional overrides of what the content implies
 //! specular = false
 //! textures = true
@@ -32,9 +40,13 @@
 //! ```
 //! Unknown keys are errors (`deny_unknown_fields`); so are values out of range (negative
 //! counts, fov outside (0, 180), NaN or infinite numbers, more than `lights::MAX_LIGHTS` lights
-//! or `lights::MAX_HOTSPOT_CLUSTERS` clusters). Every error is one line naming the file and the
-//! key (`light[2].radius` for the third `[[light]]`), or the line and column of a syntax error.
-use super::{lights, Camera, Scene};
+//! or `lights::MAX_HOTSPOT_CLUSTERS` clusters, opacity or albedo outside [0, 1]) and a
+//! `[[material]]` name the geometry does not have (the error lists some it has). Material
+//! overrides apply in file order once the geometry is loaded. Every error is one line naming
+//! the file and the key (`light[2].radius` for the third `[[light]]`, `material[1].name`), or
+//! the line and column of a syntax error.
+use super::wavefront::MtlOptions;
+use super::{lights, Camera, Scene, BUILT_INS};
 use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use serde::Deserialize;
@@ -45,12 +57,29 @@ use std::path::Path;
 pub struct Description {
     pub name: Option<String>,
     pub geometry: String,
+    /// How an OBJ geometry's MTL reads `d 0` ([`MtlOptions::d_zero_is_opaque`]); `None`: the
+    /// geometry's default.
+    pub mtl_d_zero_is_opaque: Option<bool>,
     pub camera: Option<CameraDesc>,
     pub lights: Option<LightsDesc>,
     /// Explicit lights (`[[light]]` tables), added after the generated ones.
     #[serde(default)]
     pub light: Vec<LightDesc>,
+    /// Material overrides (`[[material]]` tables), applied in order after the geometry loads.
+    #[serde(default)]
+    pub material: Vec<MaterialDesc>,
     pub effects: Option<EffectsDesc>,
+}
+
+/// Overrides of the geometry's materials named `name`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    pub name: String,
+    /// In [0, 1].
+    pub opacity: Option<f32>,
+    /// Linear RGB in [0, 1].
+    pub albedo: Option<[f32; 3]>,
 }
 
 /// One explicit point light (world space). Validated with the scene (`Scene::validate`).
@@ -200,6 +229,28 @@ fn check(d: &Description) -> Result<()> {
             bail!("lights.offset only applies to distribution = \"surfaces\"");
         }
     }
+    let procedural = super::procedural::NAMES.contains(&d.geometry.trim().to_ascii_lowercase().as_str());
+    if d.mtl_d_zero_is_opaque.is_some() && procedural {
+        bail!("mtl_d_zero_is_opaque only applies to OBJ geometry (sponza, bunny or an .obj file), not geometry = {:?}", d.geometry.trim());
+    }
+    for (i, m) in d.material.iter().enumerate() {
+        if m.name.trim().is_empty() {
+            bail!("material[{i}].name is empty: it must name a material of the geometry");
+        }
+        let unit = |key: &str, values: &[f32]| -> Result<()> {
+            finite(&format!("material[{i}].{key}"), values)?;
+            if values.iter().any(|v| !(0.0..=1.0).contains(v)) {
+                bail!("material[{i}].{key} must be in [0, 1], got {values:?}");
+            }
+            Ok(())
+        };
+        if let Some(v) = m.opacity {
+            unit("opacity", &[v])?;
+        }
+        if let Some(c) = m.albedo {
+            unit("albedo", &c)?;
+        }
+    }
     if d.light.len() > lights::MAX_LIGHTS {
         bail!("{} [[light]] tables are more than the {} lights supported", d.light.len(), lights::MAX_LIGHTS);
     }
@@ -233,6 +284,32 @@ fn default_intensity(radius: f32) -> f32 {
     lights::DEFAULT_INTENSITY * lights::radius_scaled_intensity(radius)
 }
 
+/// Most material names an unknown-name error lists.
+const LISTED_NAMES: usize = 8;
+
+/// Applies the `[[material]]` tables in order; a name the scene lacks is an error naming the key
+/// and listing some names it has.
+fn apply_material_overrides(scene: &mut Scene, overrides: &[MaterialDesc]) -> Result<()> {
+    for (i, o) in overrides.iter().enumerate() {
+        let mut found = false;
+        for m in scene.materials.iter_mut().filter(|m| m.name == o.name) {
+            found = true;
+            m.opacity = o.opacity.unwrap_or(m.opacity);
+            m.albedo = o.albedo.unwrap_or(m.albedo);
+        }
+        if !found {
+            let mut known: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+            known.dedup();
+            let mut list = known.iter().take(LISTED_NAMES).map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+            if known.len() > LISTED_NAMES {
+                list.push_str(&format!(", … ({} in all)", known.len()));
+            }
+            bail!("material[{i}].name = {:?} names no material of geometry {:?}; it has {list}", o.name, scene.name);
+        }
+    }
+    Ok(())
+}
+
 /// Loads a description file and builds its scene (geometry, camera, lights, effects).
 pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
     if !path.is_file() {
@@ -242,16 +319,16 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
     let d = parse(&text, path)?;
     let at = |e: anyhow::Error| anyhow!("scene description {}: {e:#}", path.display());
     let geometry = d.geometry.trim();
+    let mtl = d.mtl_d_zero_is_opaque.map(|d_zero_is_opaque| MtlOptions { d_zero_is_opaque });
     let mut scene = match geometry.to_ascii_lowercase().as_str() {
-        "city" => super::procedural::city(),
-        "corridor" => super::procedural::corridor(),
-        g @ ("sponza" | "bunny") => super::obj::load_builtin(g, assets_dir).map_err(at)?,
+        g if BUILT_INS.contains(&g) => super::built_in(g, assets_dir, mtl).map_err(at)?,
         g if g.ends_with(".obj") => {
             let obj = path.parent().unwrap_or(Path::new("")).join(geometry);
-            super::obj::load(&obj).map_err(at)?
+            super::obj::load(&obj, mtl.unwrap_or_default()).map_err(at)?
         }
-        _ => return Err(at(anyhow!("geometry = {geometry:?} is neither city, corridor, sponza, bunny nor an .obj file"))),
+        _ => return Err(at(anyhow!("geometry = {geometry:?} is neither a built-in scene ({}) nor an .obj file", BUILT_INS.join(", ")))),
     };
+    apply_material_overrides(&mut scene, &d.material).map_err(at)?;
     scene.name = d.name.clone().unwrap_or_else(|| path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()));
     if let Some(c) = &d.camera {
         let default = scene.camera;

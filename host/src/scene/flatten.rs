@@ -2,8 +2,9 @@
 //! and the tests, so that each of them renders a scene the same way.
 //!
 //! 1. [`flatten`] merges the meshes into one vertex/index set with one draw per mesh, the
-//!    materials into the G-buffer's material table (at most [`MAX_MATERIALS`]), and marks the
-//!    textures a draw samples — only where the scene's effects ask for them.
+//!    materials into the G-buffer's material table (at most [`MAX_MATERIALS`]; each entry carries
+//!    the material's opacity, which no pass reads yet), and marks the textures a draw samples —
+//!    only where the scene's effects ask for them.
 //! 2. [`scene_input`] borrows the flattened arrays, the lights and the textures into a
 //!    [`SceneInput`] with the camera.
 //!
@@ -29,10 +30,10 @@ pub struct Flattened {
 pub fn flatten(scene: &Scene, normal_precision: Precision) -> Result<Flattened> {
     let mut f = Flattened { positions: vec![], normals: vec![], uvs: vec![], indices: vec![], draws: vec![], materials: vec![] };
     for m in &scene.materials {
-        f.materials.push(MaterialGpu { specular: m.specular, roughness: m.roughness, _pad: [0.0; 2] });
+        f.materials.push(MaterialGpu { specular: m.specular, roughness: m.roughness, opacity: m.opacity, _pad: 0.0 });
     }
     if f.materials.is_empty() {
-        f.materials.push(MaterialGpu { specular: 0.0, roughness: 1.0, _pad: [0.0; 2] });
+        f.materials.push(MaterialGpu { specular: 0.0, roughness: 1.0, opacity: 1.0, _pad: 0.0 });
     }
     if f.materials.len() > MAX_MATERIALS as usize {
         bail!("scene {:?} has {} materials; the G-buffer addresses at most {MAX_MATERIALS}", scene.name, f.materials.len());

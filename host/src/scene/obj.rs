@@ -2,10 +2,12 @@
 //! the text, so every error names the file and line).
 //!
 //! Material mapping: `Kd` → albedo; `map_Kd` → albedo texture; `Ks` → specular (its largest
-//! component); `Ns` → roughness ([`roughness_from_ns`]); `map_d` → alpha mask (alpha-tested).
-//! `d` (dissolve) is ignored: everything without a `map_d` is opaque — Crytek Sponza's MTL has
-//! `d 0` on its opaque materials. `map_Ka` and bump/normal maps are not used. Texture paths are
-//! relative to the MTL's directory; backslashes are read as separators.
+//! component); `Ns` → roughness ([`roughness_from_ns`]); `map_d` → alpha mask (alpha-tested);
+//! `d` / `Tr` → opacity ([`super::wavefront`] gives the rule, and [`MtlOptions`] the switch that
+//! reads `d 0` as opaque: the built-in `sponza` sets it, [`builtin_mtl_options`]). A library
+//! whose materials come out fully transparent is loaded with a warning that names the switch.
+//! `map_Ka` and bump/normal maps are not used. Texture paths are relative to the MTL's directory;
+//! backslashes are read as separators.
 //!
 //! Missing pieces are warnings, not errors: a material library that is not there (grey default
 //! material), a texture that is missing or cannot be decoded (drawn untextured / opaque), a
@@ -14,7 +16,7 @@
 //!
 //! Default camera ([`default_camera`]): [`Camera::framing`] from +z, a little above and to the
 //! right (direction (0.35, 0.3, 1)), 60° vertical fov. Sponza and the bunny have their own.
-use super::wavefront::{parse_mtl, parse_obj};
+use super::wavefront::{parse_mtl, parse_obj, MtlOptions};
 use super::{Camera, Material, Scene, Texture, TextureKind};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::Vec3;
@@ -23,8 +25,15 @@ use std::path::{Path, PathBuf};
 
 pub use super::wavefront::{roughness_from_ns, texture_path};
 
-/// Loads `assets_dir/<name>/<name>.obj` (`sponza` or `bunny`) with its own default camera.
-pub fn load_builtin(name: &str, assets_dir: &Path) -> Result<Scene> {
+/// How the built-in OBJ scene `name` reads its MTL: Sponza's `d 0` means opaque (its assets'
+/// README: an artefact of the Crytek export on 22 of its 25 materials).
+pub fn builtin_mtl_options(name: &str) -> MtlOptions {
+    MtlOptions { d_zero_is_opaque: name == "sponza" }
+}
+
+/// Loads `assets_dir/<name>/<name>.obj` (`sponza` or `bunny`) with its own default camera,
+/// reading its MTL with `mtl` (normally [`builtin_mtl_options`]).
+pub fn load_builtin(name: &str, assets_dir: &Path, mtl: MtlOptions) -> Result<Scene> {
     let path = assets_dir.join(name).join(format!("{name}.obj"));
     if !path.is_file() {
         bail!(
@@ -32,7 +41,7 @@ pub fn load_builtin(name: &str, assets_dir: &Path) -> Result<Scene> {
             path.display()
         );
     }
-    let mut scene = load(&path)?;
+    let mut scene = load(&path, mtl)?;
     scene.name = name.to_owned();
     scene.camera = match name {
         "sponza" => sponza_camera(),
@@ -86,8 +95,9 @@ pub fn load_texture(path: &Path, kind: TextureKind) -> Result<Texture> {
     Ok(Texture { path: path.to_owned(), kind, width, height, rgba8 })
 }
 
-/// Loads an OBJ file (and its MTL and textures) into a scene named after the file.
-pub fn load(path: &Path) -> Result<Scene> {
+/// Loads an OBJ file (and its MTL and textures, read with `mtl`) into a scene named after the
+/// file.
+pub fn load(path: &Path, mtl_options: MtlOptions) -> Result<Scene> {
     if !path.is_file() {
         bail!("scene file {} not found", path.display());
     }
@@ -102,7 +112,11 @@ pub fn load(path: &Path) -> Result<Scene> {
         // Only regular files: a device or a pipe named by the OBJ could be read forever.
         let read = if mtl.is_file() { std::fs::read(&mtl).map_err(|e| e.to_string()) } else { Err("not a file".into()) };
         match read {
-            Ok(text) => materials.extend(parse_mtl(&text, &mtl, mtl.parent().unwrap_or(&dir))?),
+            Ok(text) => {
+                let lib = parse_mtl(&text, &mtl, mtl.parent().unwrap_or(&dir), mtl_options)?;
+                warnings.extend(invisible_materials_warning(&mtl, &lib, mtl_options));
+                materials.extend(lib);
+            }
             Err(e) => warnings.push(format!("{}: material library {} not loaded ({e}); using a grey default material", path.display(), mtl.display())),
         }
     }
@@ -129,6 +143,29 @@ pub fn load(path: &Path) -> Result<Scene> {
     let mut scene = Scene::new(&name, meshes, materials, textures, default_camera(bounds));
     scene.warnings = warnings;
     Ok(scene)
+}
+
+/// Most material names a warning quotes.
+const QUOTED_NAMES: usize = 4;
+
+/// A warning when materials of library `mtl` are fully transparent: usually an exporter's `d 0`
+/// on opaque materials, which `mtl_d_zero_is_opaque` reads as opaque (not said when it is set:
+/// then they came from `Tr 1`).
+fn invisible_materials_warning(mtl: &Path, lib: &[Material], options: MtlOptions) -> Option<String> {
+    let invisible: Vec<&str> = lib.iter().filter(|m| m.opacity == 0.0).map(|m| m.name.as_str()).collect();
+    if invisible.is_empty() {
+        return None;
+    }
+    let mut names = invisible.iter().take(QUOTED_NAMES).map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+    if invisible.len() > QUOTED_NAMES {
+        names.push_str(", …");
+    }
+    let hint = if options.d_zero_is_opaque {
+        String::new()
+    } else {
+        "; if the file means opaque by `d 0` (an exporter artefact, Crytek Sponza's among them), load it from a scene description with mtl_d_zero_is_opaque = true".to_owned()
+    };
+    Some(format!("{}: {} of {} materials have opacity 0 (d 0 or Tr 1: {names}) and will be invisible once transparency is rendered{hint}", mtl.display(), invisible.len(), lib.len()))
 }
 
 /// Decodes every distinct texture the materials name (in parallel). A texture that fails is

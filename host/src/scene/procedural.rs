@@ -6,12 +6,19 @@
 //!   degrade because one tile spans buildings from 1 m to 500 m away.
 //! * [`corridor`]: a 120 m corridor (floor, walls, ceiling, end walls, pillars and beams every
 //!   6 m), the camera at one end looking down it.
+//! * [`glass`]: the city with coloured glass panes of six transparent materials: shop windows
+//!   before the facades along the central avenue, panes across it over the crossings, and a
+//!   stack of [`GLASS_STACK_PANES`] parallel panes in it that puts that many transparent layers
+//!   (twice as many surfaces) on the pixels looking through it (view `glass@stack`).
 //!
 //! Boxes have 24 vertices (flat normals per face) and counter-clockwise front faces seen from
 //! outside (right-handed, y up); uvs are face-local metres.
 use super::lights::Pcg32;
 use super::{Camera, Material, Mesh, Scene};
 use glam::Vec3;
+
+/// The built-in scenes this module makes.
+pub const NAMES: [&str; 3] = ["city", "corridor", "glass"];
 
 /// An axis-aligned box, (min, max).
 pub type BoxBounds = (Vec3, Vec3);
@@ -121,6 +128,67 @@ pub fn city() -> Scene {
         far: 1000.0,
     };
     Scene::new("city", meshes, materials, vec![], camera)
+}
+
+/// The transparent materials of [`glass`]: (name, albedo, opacity), all with specular 0.5 and
+/// roughness 0.1. (The city's own `glass` is an opaque facade material.)
+pub const GLASS_PANES: [(&str, [f32; 3], f32); 6] = [
+    ("pane red", [0.85, 0.15, 0.12], 0.35),
+    ("pane amber", [0.95, 0.60, 0.10], 0.5),
+    ("pane green", [0.20, 0.75, 0.30], 0.3),
+    ("pane blue", [0.15, 0.35, 0.90], 0.45),
+    ("pane clear", [0.90, 0.95, 1.00], 0.12),
+    ("pane smoke", [0.25, 0.25, 0.28], 0.7),
+];
+/// Panes in the stack of [`glass`]: 0.02 m thick, 0.35 m apart, 6 × 6 m, across the central
+/// avenue from z = 240 towards −z (the camera's side is +z).
+pub const GLASS_STACK_PANES: usize = 24;
+/// View `glass@stack` as (position, target, near, far): from the avenue's left half, through the
+/// whole stack at a slant onto the facade of a 26 m building behind it.
+pub const GLASS_STACK_VIEW: (Vec3, Vec3, f32, f32) = (Vec3::new(-2.2, 2.6, 246.0), Vec3::new(4.21, 2.0, 205.0), 0.1, 1000.0);
+
+/// The panes of [`glass`] as (box, index into [`GLASS_PANES`]), in a fixed order: the stack,
+/// the panes across the avenue, then the shop windows (0.3 m before each facade that faces the
+/// avenue, up to 8 m high).
+pub fn glass_panes() -> Vec<(BoxBounds, u32)> {
+    let colours = GLASS_PANES.len() as u32;
+    let b = |min: [f32; 3], max: [f32; 3]| (Vec3::from_array(min), Vec3::from_array(max));
+    let mut panes = Vec::new();
+    for k in 0..GLASS_STACK_PANES {
+        let z = 240.0 - 0.35 * k as f32;
+        panes.push((b([-3.0, 0.5, z - 0.01], [3.0, 6.5, z + 0.01]), k as u32 % colours));
+    }
+    // Over every second crossing of the avenue (the cross streets run at z = 194..202 − 44 j).
+    for j in 0..10u32 {
+        let z = 200.0 - 44.0 * j as f32;
+        let y = 5.0 + 3.0 * (j % 3) as f32;
+        let height = 4.0 + 2.0 * (j % 2) as f32;
+        panes.push((b([-3.9, y, z - 0.025], [3.9, y + height, z + 0.025]), (j + 1) % colours));
+    }
+    // The avenue's building lines are x = ±4 (plus each lot's inset).
+    for (k, ((lo, hi), _)) in city_buildings().into_iter().enumerate() {
+        let (top, colour) = ((hi.y - 0.3).min(8.0), k as u32 % colours);
+        if (4.0..5.0).contains(&lo.x) {
+            panes.push((b([lo.x - 0.32, 0.3, lo.z + 0.4], [lo.x - 0.3, top, hi.z - 0.4]), colour));
+        } else if (-5.0..=-4.0).contains(&hi.x) {
+            panes.push((b([hi.x + 0.3, 0.3, lo.z + 0.4], [hi.x + 0.32, top, hi.z - 0.4]), colour));
+        }
+    }
+    panes
+}
+
+/// The glass city (see the module docs): [`city`]'s geometry and materials, then the
+/// [`GLASS_PANES`] materials with one mesh each. Camera: above the end of the central avenue,
+/// looking down it over the stack (near 0.1, far 1000).
+pub fn glass() -> Scene {
+    let city = city();
+    let first = city.materials.len() as u32;
+    let mut materials = city.materials;
+    materials.extend(GLASS_PANES.iter().map(|&(name, albedo, opacity)| Material { opacity, ..material(name, albedo, 0.5, 0.1) }));
+    let mut meshes = city.meshes;
+    meshes.extend(meshes_from(GLASS_PANES.len(), &glass_panes()).into_iter().map(|m| Mesh { material: m.material + first, ..m }));
+    let camera = Camera { position: Vec3::new(-1.5, 7.0, 262.0), target: Vec3::new(1.0, 3.0, 190.0), ..city.camera };
+    Scene::new("glass", meshes, materials, vec![], camera)
 }
 
 /// Corridor length, width and height (m); pillars every [`CORRIDOR_BAY`] m.

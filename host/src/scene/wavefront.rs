@@ -14,17 +14,34 @@
 //! triangulated as fans; each distinct `(v, vt, vn)` corner becomes one vertex of its mesh.
 //!
 //! MTL statements read: `newmtl`, `Kd`, `Ks` (one value or three), `Ns`, `map_Kd`, `map_d`
-//! (texture options such as `-bm 1` are skipped; the file name is the last word then). Others
-//! (`Ka`, `d`, `illum`, bump maps, …) are ignored.
+//! (texture options such as `-bm 1` are skipped; the file name is the last word then), `d` and
+//! `Tr`. Others (`Ka`, `Tf`, `illum`, bump maps, …) are ignored.
+//!
+//! Opacity ([`Material::opacity`]): `d v` (dissolve) is the opacity `v`; `d -halo v` is read as
+//! `d v`. `Tr v` (transparency) is the opacity `1 − v`. When a material has both, `d` wins
+//! wherever it appears, since exporters that write both do not always keep them consistent;
+//! without either it is opaque. `d 0` is fully transparent as the format says, except under
+//! [`MtlOptions::d_zero_is_opaque`]: many exporters (Crytek Sponza's, 22 of its 25 materials)
+//! write `d 0` on opaque materials. `illum` cannot tell them apart (Sponza says `illum 2`
+//! everywhere, as do files whose `d 0.5` is meant), so that reading is a switch of the file's
+//! loader: the built-in `sponza` sets it, a scene description may (`mtl_d_zero_is_opaque`).
 //!
 //! Validation: every number must be finite (`1e39` overflows `f32` and is refused); colours must
-//! be ≥ 0 and are clamped to 1; `Ns` must be ≥ 0. Work is linear in the input's size whatever
+//! be ≥ 0 and are clamped to 1; `Ns` must be ≥ 0; `d` and `Tr` must be in [0, 1]. Work is linear in the input's size whatever
 //! its numbers say: an index is checked against what exists before anything is allocated for it.
 use super::{face_averaged_normals, Material, Mesh};
 use anyhow::{anyhow, Result};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+
+/// How an MTL file's values are read where files disagree with the format.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MtlOptions {
+    /// Read `d 0` as opaque (an exporter artefact, see the module docs). `Tr 1` stays fully
+    /// transparent.
+    pub d_zero_is_opaque: bool,
+}
 
 /// Longest excerpt of an offending word quoted in an error.
 const QUOTE_CHARS: usize = 32;
@@ -280,10 +297,43 @@ fn colour(at: &At<'_>, rest: impl Iterator<Item = impl AsRef<[u8]>>, what: &str)
     Ok(c.map(|x| x.min(1.0)))
 }
 
+/// A `d` or `Tr` value: one number in [0, 1], after an optional `-halo` (`d` only).
+fn fraction<'w>(at: &At<'_>, mut rest: impl Iterator<Item = &'w [u8]>, what: &str, meaning: &str) -> Result<f32> {
+    let mut first = rest.next();
+    if what == "d" && first == Some(b"-halo".as_slice()) {
+        first = rest.next();
+    }
+    let v = at.numbers(first.into_iter(), what, 1, 1)?[0];
+    if !(0.0..=1.0).contains(&v) {
+        return Err(at.err(format!("{what} {v} is out of range: {meaning} must be in [0, 1]")));
+    }
+    Ok(v)
+}
+
+/// The `d` and `Tr` values a material gave (the last of each), resolved once the file is read.
+#[derive(Clone, Copy, Default)]
+struct Opacity {
+    d: Option<f32>,
+    tr: Option<f32>,
+}
+
+impl Opacity {
+    /// See the module docs: `d` wins over `Tr`; `d 0` is opaque under `d_zero_is_opaque`.
+    fn resolve(self, options: MtlOptions) -> f32 {
+        match (self.d, self.tr) {
+            (Some(d), _) if d == 0.0 && options.d_zero_is_opaque => 1.0,
+            (Some(d), _) => d,
+            (None, Some(tr)) => 1.0 - tr,
+            (None, None) => 1.0,
+        }
+    }
+}
+
 /// Parses MTL text into materials; texture paths are made relative to `dir` (the MTL's
 /// directory); `file` names the source in errors.
-pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path) -> Result<Vec<Material>> {
+pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path, options: MtlOptions) -> Result<Vec<Material>> {
     let mut materials: Vec<Material> = Vec::new();
+    let mut opacity: Vec<Opacity> = Vec::new();
     for (n, line) in text.split(|&b| b == b'\n').enumerate() {
         let at = At { kind: "MTL", file, line: n + 1 };
         let mut w = words(line);
@@ -294,15 +344,18 @@ pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path) -> Result<Vec<Material>> 
                 return Err(at.err("newmtl names no material"));
             }
             materials.push(Material::diffuse(&name, [0.8; 3]));
+            opacity.push(Opacity::default());
             continue;
         }
-        if !matches!(keyword, b"Kd" | b"Ks" | b"Ns" | b"map_Kd" | b"map_d") {
+        if !matches!(keyword, b"Kd" | b"Ks" | b"Ns" | b"map_Kd" | b"map_d" | b"d" | b"Tr") {
             continue;
         }
-        let Some(m) = materials.last_mut() else {
+        let (Some(m), Some(o)) = (materials.last_mut(), opacity.last_mut()) else {
             return Err(at.err(format!("{} before the first newmtl", quote(keyword))));
         };
         match keyword {
+            b"d" => o.d = Some(fraction(&at, w, "d", "opacity")?),
+            b"Tr" => o.tr = Some(fraction(&at, w, "Tr", "transparency")?),
             b"Kd" => m.albedo = colour(&at, w, "Kd")?,
             // Specular weight: the largest component of Ks.
             b"Ks" => m.specular = colour(&at, w, "Ks")?.into_iter().fold(0.0, f32::max),
@@ -326,6 +379,9 @@ pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path) -> Result<Vec<Material>> 
                 }
             }
         }
+    }
+    for (m, o) in materials.iter_mut().zip(opacity) {
+        m.opacity = o.resolve(options);
     }
     Ok(materials)
 }
@@ -385,7 +441,7 @@ mod tests {
     #[test]
     fn mtl_values_are_checked() {
         let dir = Path::new("d");
-        let mtl = |t: &str| parse_mtl(t.as_bytes(), Path::new("m.mtl"), dir);
+        let mtl = |t: &str| parse_mtl(t.as_bytes(), Path::new("m.mtl"), dir, MtlOptions::default());
         let m = mtl("# c\nnewmtl a b\nKd 0.5\nKs 2 0.1 0\nNs 198\nmap_Kd -bm 1 tex\\a.png\nmap_d  mask.png \nd 0\n").unwrap();
         assert_eq!((m[0].name.as_str(), m[0].albedo, m[0].specular), ("a b", [0.5; 3], 1.0));
         assert!((m[0].roughness - 0.1).abs() < 1e-6);
