@@ -126,28 +126,30 @@ impl Lane4 {
 /// `(pad_a, a) < (pad_b, b)`: real keys before pads, pads all equal.
 #[inline]
 fn less(a: u32, pad_a: u32, b: u32, pad_b: u32) -> bool {
-    if pad_a != pad_b {
-        pad_a < pad_b
-    } else {
-        pad_a == 0 && a < b
-    }
+    // Non-short-circuit `&` / `|`: no branches in the sorting network.
+    (pad_a < pad_b) | ((pad_a == pad_b) & (pad_a == 0) & (a < b))
+}
+
+/// `if s { a } else { b }` by masks, branch-free.
+#[inline]
+fn pick(s: bool, a: u32, b: u32) -> u32 {
+    let m = 0u32.wrapping_sub(s as u32);
+    (a & m) | (b & !m)
 }
 
 /// Compare-exchange of slots `i < i2` of one lane: slot `i` keeps the minimum when `ascending`.
 #[inline]
 fn exchange_regs(mut x: Lane4, i: usize, i2: usize, ascending: bool) -> Lane4 {
     let (pi, pi2) = ((x.pad >> i) & 1, (x.pad >> i2) & 1);
-    let swap = if ascending { less(x.k[i2], pi2, x.k[i], pi) } else { less(x.k[i], pi, x.k[i2], pi2) };
-    if swap {
-        let (k, v) = (x.k[i], x.v[i]);
-        x.k[i] = x.k[i2];
-        x.v[i] = x.v[i2];
-        x.k[i2] = k;
-        x.v[i2] = v;
-        if pi != pi2 {
-            x.pad ^= (1 << i) | (1 << i2);
-        }
-    }
+    let up = less(x.k[i2], pi2, x.k[i], pi);
+    let down = less(x.k[i], pi, x.k[i2], pi2);
+    let swap = (ascending & up) | (!ascending & down);
+    let (k, v, k2, v2) = (x.k[i], x.v[i], x.k[i2], x.v[i2]);
+    x.k[i] = pick(swap, k2, k);
+    x.v[i] = pick(swap, v2, v);
+    x.k[i2] = pick(swap, k, k2);
+    x.v[i2] = pick(swap, v, v2);
+    x.pad ^= pick(swap & (pi != pi2), (1 << i) | (1 << i2), 0);
     x
 }
 
@@ -165,6 +167,8 @@ fn exchange_lanes<C: Coop>(c: &C, x: Lane4, mask: u32, ascending: u32) -> Lane4 
         let (pp, mp) = ((partner_pad >> j) & 1, (x.pad >> j) & 1);
         let keep_min = lower == ((ascending >> j) & 1 != 0);
         let take = if keep_min { less(pk, pp, x.k[j as usize], mp) } else { less(x.k[j as usize], mp, pk, pp) };
+        // A branch, not `pick`: lavapipe (Mesa 22.3) sorted wrongly when the shuffled elements
+        // were selected by masks here (the CPU emulation did not).
         if take {
             y.k[j as usize] = pk;
             y.v[j as usize] = pv;
@@ -206,12 +210,10 @@ fn exchange_shared<C: Coop, S: SharedU32 + ?Sized>(c: &C, sh: &mut S, x: Lane4, 
         let pt = sh.load(BLOCK + (e ^ d));
         let (pp, mp) = (pt >> 31, (x.pad >> j) & 1);
         let keep_min = (e & d == 0) == (e & size == 0);
-        let take = if keep_min { less(pk, pp, x.k[j as usize], mp) } else { less(x.k[j as usize], mp, pk, pp) };
-        if take {
-            y.k[j as usize] = pk;
-            y.v[j as usize] = pt & !TAG_PAD;
-            y.pad = (y.pad & !(1 << j)) | (pp << j);
-        }
+        let take = (keep_min & less(pk, pp, x.k[j as usize], mp)) | (!keep_min & less(x.k[j as usize], mp, pk, pp));
+        y.k[j as usize] = pick(take, pk, x.k[j as usize]);
+        y.v[j as usize] = pick(take, pt & !TAG_PAD, x.v[j as usize]);
+        y.pad = pick(take, (y.pad & !(1 << j)) | (pp << j), y.pad);
     });
     c.workgroup_barrier();
     y
