@@ -26,11 +26,14 @@ pub mod flatten;
 pub mod lights;
 pub mod obj;
 pub mod procedural;
+pub mod text;
 pub mod wavefront;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod transparency_tests;
+#[cfg(test)]
+mod encoding_tests;
 
 /// Built-in scene names accepted by [`Scene::load`].
 pub const BUILT_INS: [&str; 5] = ["city", "corridor", "glass", "sponza", "bunny"];

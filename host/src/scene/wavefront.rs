@@ -3,8 +3,10 @@
 //!
 //! Both parsers go line by line, so every error names the file and the line: `OBJ file
 //! x.obj line 12: …`. Lines are bytes: a comment or a name may hold any bytes (names are read as
-//! UTF-8 with replacement characters), `\r\n` endings and tabs are whitespace, and a number
-//! that is not valid UTF-8 is an error like any other malformed number.
+//! UTF-8, or as Latin-1 where they are not valid UTF-8: [`super::text::name`]), `\r\n` endings
+//! and tabs are whitespace, and a number that is not valid UTF-8 is an error like any other
+//! malformed number. Files with a byte-order mark (UTF-8, UTF-16 LE or BE) are decoded first
+//! ([`super::text::decode`]). `newmtl` and `usemtl` may name the empty name (Blender writes it).
 //!
 //! OBJ statements read: `v x y z [w]` (w ignored), `vt u [v [w]]`, `vn x y z`, `f` with corners
 //! `v`, `v/vt`, `v//vn` or `v/vt/vn` (1-based; negative = relative to the end; a corner may only
@@ -73,7 +75,7 @@ fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
 fn rest_of_line(line: &[u8]) -> String {
     let line = line.trim_ascii();
     let start = line.iter().position(|b| b.is_ascii_whitespace()).unwrap_or(line.len());
-    String::from_utf8_lossy(line[start..].trim_ascii()).into_owned()
+    super::text::name(line[start..].trim_ascii())
 }
 
 /// A word as it appears in an error: escaped and cut to [`QUOTE_CHARS`].
@@ -184,6 +186,7 @@ struct Elements {
 
 /// Parses OBJ text; `file` names the source in errors.
 pub fn parse_obj(text: &[u8], file: &Path) -> Result<ObjFile> {
+    let text = super::text::decode(text);
     let mut out = ObjFile::default();
     let mut el = Elements::default();
     let mut mesh = Builder::default();
@@ -241,10 +244,8 @@ pub fn parse_obj(text: &[u8], file: &Path) -> Result<ObjFile> {
                 }
             }
             b"usemtl" => {
+                // An empty name is a name (Blender writes `newmtl` and `usemtl` without one).
                 let name = rest_of_line(line);
-                if name.is_empty() {
-                    return Err(at.err("usemtl names no material"));
-                }
                 if mesh.material_name.as_deref() != Some(&name) && !mesh.indices.is_empty() {
                     let done = std::mem::take(&mut mesh);
                     out.meshes.push(done.finish());
@@ -332,6 +333,7 @@ impl Opacity {
 /// Parses MTL text into materials; texture paths are made relative to `dir` (the MTL's
 /// directory); `file` names the source in errors.
 pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path, options: MtlOptions) -> Result<Vec<Material>> {
+    let text = super::text::decode(text);
     let mut materials: Vec<Material> = Vec::new();
     let mut opacity: Vec<Opacity> = Vec::new();
     for (n, line) in text.split(|&b| b == b'\n').enumerate() {
@@ -340,9 +342,6 @@ pub fn parse_mtl(text: &[u8], file: &Path, dir: &Path, options: MtlOptions) -> R
         let Some(keyword) = w.next() else { continue };
         if keyword == b"newmtl" {
             let name = rest_of_line(line);
-            if name.is_empty() {
-                return Err(at.err("newmtl names no material"));
-            }
             materials.push(Material::diffuse(&name, [0.8; 3]));
             opacity.push(Opacity::default());
             continue;
@@ -455,6 +454,6 @@ mod tests {
         assert!(e("newmtl a\nNs inf\n").contains("not a finite"));
         assert!(e("Kd 1 1 1\n").contains("line 1: \"Kd\" before the first newmtl"));
         assert!(e("newmtl a\nmap_Kd\n").contains("names no texture file"));
-        assert!(e("newmtl\n").contains("newmtl names no material"));
+        assert_eq!(mtl("newmtl\n").unwrap()[0].name, "", "an empty name is a name");
     }
 }
