@@ -107,7 +107,41 @@ pub fn cluster_lights_bvh<C: Coop>(
     light_bvh::walk_subgroup(c, nodes, spheres, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), emit)
 }
 
-/// Step 3, pass 1: lights per unique cluster (one subgroup each).
+/// Lights per cluster that the counting walk also stores (the fill pass then copies them instead
+/// of walking again; longer lists are walked twice).
+pub const STAGED_LIGHTS: u32 = 32;
+/// Most clusters of a frame that stage their lists (`STAGED_LIGHTS` words each: 8 MiB); the
+/// host stages `min(this, its cluster capacity)` (`BvhAssignParams::staged_clusters`), the
+/// rest walk twice. A 1080p Sponza frame has about 7k unique clusters.
+pub const STAGED_CLUSTERS: u32 = 1 << 16;
+
+/// Whether cluster `cl` with `count` lights has its whole list staged (`staged_clusters` of the
+/// frame stage).
+#[inline]
+pub fn staged(cl: u32, count: u32, staged_clusters: u32) -> bool {
+    cl < staged_clusters && count <= STAGED_LIGHTS
+}
+
+/// Stores light `light` of cluster `cl`'s list at slot `k` of its stage, where it fits.
+#[inline]
+pub fn stage(stage: &mut [u32], cl: u32, k: u32, light: u32, staged_clusters: u32) {
+    if cl < staged_clusters && k < STAGED_LIGHTS {
+        stage[(cl * STAGED_LIGHTS + k) as usize] = light;
+    }
+}
+
+/// Step 3, pass 2 for a staged cluster: its `count` lights copied to `list[base..]`, lane by lane.
+#[inline]
+pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, base: u32, mut store: impl FnMut(u32, u32)) {
+    let mut i = c.lane();
+    while i < count {
+        store(base + i, stage[(cl * STAGED_LIGHTS + i) as usize]);
+        i += c.subgroup_size();
+    }
+}
+
+/// Step 3, pass 1: lights per unique cluster (one subgroup each), the first [`STAGED_LIGHTS`] of
+/// each of the first `p.staged_clusters` clusters stored in `staged_lists`.
 #[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
 pub fn cluster_light_counts_bvh(
@@ -126,6 +160,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] counts: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] nodes: &[ClusterAabb],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] staged_lists: &mut [u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
@@ -133,7 +168,7 @@ pub fn cluster_light_counts_bvh(
         return;
     }
     let n = if cl < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |_, _| {})
+        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters))
     } else {
         0
     };
@@ -142,7 +177,8 @@ pub fn cluster_light_counts_bvh(
     }
 }
 
-/// Step 3, pass 2: each cluster's light indices at its offset (one subgroup each).
+/// Step 3, pass 2: each cluster's light indices at its offset (one subgroup each): copied from
+/// its stage where the whole list is staged, walked again otherwise.
 #[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
 pub fn cluster_light_fill_bvh(
@@ -162,6 +198,8 @@ pub fn cluster_light_fill_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] list: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] nodes: &[ClusterAabb],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] staged_lists: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] counts: &[u32],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
@@ -172,5 +210,10 @@ pub fn cluster_light_fill_bvh(
         return;
     }
     let base = offsets[cl as usize];
-    cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
+    let count = counts[cl as usize];
+    if staged(cl, count, p.staged_clusters) {
+        copy_staged(&c, staged_lists, cl, count, base, |i, l| list[i as usize] = l);
+    } else {
+        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
+    }
 }

@@ -401,7 +401,10 @@ pub struct BvhAssignParams {
     pub frame: FrameParams,
     /// Children per node of the light BVH (32 or 64).
     pub branching: u32,
-    pub _pad: [u32; 3],
+    /// Clusters `0..staged_clusters` stage their lists (`clustered_bvh::STAGED_LIGHTS` words
+    /// each) in the counting walk; 0 stages none.
+    pub staged_clusters: u32,
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);
