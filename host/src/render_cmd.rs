@@ -25,7 +25,7 @@ pub const MAX_FRAMES: u32 = 100_000;
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
     /// Built-in scene (city, corridor, glass, sponza, bunny; `name@view` for a named camera view:
-    /// city@corner, sponza@column, glass@stack), a .toml description or an .obj file.
+    /// city@corner, sponza@column, glass@stack), a .toml description, or an .obj, .gltf or .glb file.
     #[arg(long, default_value = "city")]
     pub scene: String,
     /// Point lights to generate (when the scene description does not give them).

@@ -3,7 +3,7 @@
 //!
 //! ```toml
 //! name = "my scene"               # optional: the file's stem otherwise
-//! geometry = "city"               # city | corridor | glass | sponza | bunny | an .obj path
+//! geometry = "city"               # city | corridor | glass | sponza | bunny | an .obj, .gltf or .glb path
 //!                                 # (relative to this file)
 //! mtl_d_zero_is_opaque = true     # OBJ geometry only, optional: read the MTL's `d 0` as opaque
 //!                                 # (an exporter artefact; default true for sponza, else false)
@@ -326,7 +326,13 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
             let obj = path.parent().unwrap_or(Path::new("")).join(geometry);
             super::obj::load(&obj, mtl.unwrap_or_default()).map_err(at)?
         }
-        _ => return Err(at(anyhow!("geometry = {geometry:?} is neither a built-in scene ({}) nor an .obj file", BUILT_INS.join(", ")))),
+        g if g.ends_with(".gltf") || g.ends_with(".glb") => {
+            if mtl.is_some() {
+                return Err(at(anyhow!("mtl_d_zero_is_opaque only applies to OBJ geometry, not geometry = {geometry:?}")));
+            }
+            super::gltf::load(&path.parent().unwrap_or(Path::new("")).join(geometry)).map_err(at)?
+        }
+        _ => return Err(at(anyhow!("geometry = {geometry:?} is neither a built-in scene ({}) nor an .obj, .gltf or .glb file", BUILT_INS.join(", ")))),
     };
     apply_material_overrides(&mut scene, &d.material).map_err(at)?;
     scene.name = d.name.clone().unwrap_or_else(|| path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()));
@@ -357,7 +363,8 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
             light.radius = l.radius.unwrap_or(light.radius);
             light.intensity = l.intensity.unwrap_or(light.intensity);
         }
-        scene.lights = generated;
+        // After the geometry's own lights (a glTF file's).
+        scene.lights.extend(generated);
     }
     scene.lights.extend(d.light.iter().map(|l| shaders::layout::PointLight {
         position: l.position,

@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 pub mod description;
 pub mod flatten;
+pub mod gltf;
 pub mod lights;
 pub mod obj;
 pub mod procedural;
@@ -34,6 +35,8 @@ mod tests;
 mod transparency_tests;
 #[cfg(test)]
 mod encoding_tests;
+#[cfg(test)]
+mod gltf_tests;
 
 /// Built-in scene names accepted by [`Scene::load`].
 pub const BUILT_INS: [&str; 5] = ["city", "corridor", "glass", "sponza", "bunny"];
@@ -281,8 +284,9 @@ impl Scene {
             _ if BUILT_INS.contains(&lower.as_str()) => built_in(&lower, assets_dir, None)?,
             _ if lower.ends_with(".toml") => description::load(Path::new(spec), assets_dir)?,
             _ if lower.ends_with(".obj") => obj::load(Path::new(spec), wavefront::MtlOptions::default())?,
+            _ if lower.ends_with(".gltf") || lower.ends_with(".glb") => gltf::load(Path::new(spec))?,
             _ => bail!(
-                "unknown scene {spec:?}: expected one of {}, a .toml description or an .obj file",
+                "unknown scene {spec:?}: expected one of {}, a .toml description, an .obj, .gltf or .glb file",
                 BUILT_INS.join(", ")
             ),
         };
