@@ -15,8 +15,9 @@
 //!    `clustered-naive` tests every light against the cluster's AABB; `clustered-bvh` walks the
 //!    light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node boxes, on the
 //!    async-compute queue, overlapping the G-buffer raster). Its counting walk also stages the
-//!    first `STAGED_LIGHTS` = 32 lights of each cluster, so the fill copies every list that fits
-//!    instead of walking again (H200, Sponza 1080p, 10k lights: assignment 0.260 → 0.211 ms).
+//!    first `STAGED_LIGHTS` = 64 lights of each cluster, so the fill copies every list that fits
+//!    instead of walking again (H200, Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms;
+//!    0.211 with 32 staged).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
@@ -25,7 +26,7 @@
 //! Memory: 4 B per pixel (keys); 4 B per page of the key space ×2 (marks, page table); 8 B per
 //! slot (512 slots per touched page); 12 B per unique cluster (list, counts, offsets); 4 B per
 //! light reference; scan scratch ≈ 1/128 of what it scans; the BVH (`bvh.rs`); `clustered-bvh`'s
-//! staged lists, 128 B per cluster for up to `STAGED_CLUSTERS` = 65 536 (≤ 8 MiB).
+//! staged lists, 256 B per cluster for up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB).
 use super::bvh::LightBvh;
 use super::gbuffer::Targets;
 use super::scan::{Counted, DeviceScan};
