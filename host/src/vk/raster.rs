@@ -52,6 +52,9 @@ pub enum DepthTest {
     NearestWrites,
     /// Pass fragments at exactly the stored depth (a pass over a pre-pass's depth); no writes.
     EqualReadOnly,
+    /// Pass fragments nearer than the stored depth (transparent surfaces in front of the opaque
+    /// ones); no writes.
+    NearerReadOnly,
 }
 
 /// A raster pipeline for handle `RasterKernel<P>`: drawing with it takes a `&P`.
@@ -110,6 +113,7 @@ impl<P> GraphicsPipeline<P> {
         let (compare, write) = match depth {
             DepthTest::NearestWrites => (vk::CompareOp::GREATER, true),
             DepthTest::EqualReadOnly => (vk::CompareOp::EQUAL, false),
+            DepthTest::NearerReadOnly => (vk::CompareOp::GREATER, false),
         };
         let depth_state = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(true).depth_write_enable(write).depth_compare_op(compare);
         let blend: Vec<_> = colours.iter().map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)).collect();
