@@ -282,3 +282,7 @@ transparent_entries!(
         sample_draw_uniform(albedo_map, in_uv).truncate()
     }
 );
+
+#[cfg(test)]
+#[path = "raster_transparent_tests.rs"]
+mod tests;
