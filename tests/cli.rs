@@ -170,7 +170,7 @@ fn render_bad_input_is_a_one_line_error_with_status_2() {
         (vec!["--normal-precision", "f64"], vec!["'f64'", "oct8"]),
         (vec!["--technique", "forward-plus", "--fp-lists", "ring"], vec!["'ring'", "linked", "array"]),
         (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
-        (vec!["--oit", "weighted"], vec!["'weighted'", "exact", "k8"]),
+        (vec!["--oit", "k3"], vec!["'k3'", "exact", "weighted"]),
         (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
     ];
     for (extra, needles) in cases {

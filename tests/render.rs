@@ -80,6 +80,19 @@ fn glass_stack_equals_the_reference() {
     assert_transparent_fragments_listed(&f, "glass@stack");
 }
 
+/// Weighted blended OIT (`--oit weighted`, no lists): the clustered techniques equal the
+/// reference's weighted pass within 1/255 on the glass stack, and every fragment found its list.
+#[test]
+fn weighted_oit_equals_the_reference() {
+    let gpu = common::gpu();
+    let scene = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let l = lights::uniform(&scene, 300, 29).unwrap();
+    let s = Settings { oit: OitVariant::Weighted, ..settings(96, 54, Technique::Deferred) };
+    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "glass@stack, weighted");
+    let t = f.transparency.unwrap();
+    assert!(t.fragments > 0 && t.unlisted == 0 && t.node_bytes == 0, "weighted: {t:?}");
+}
+
 /// The transparent pass ran, and every transparent fragment found its cluster's light list.
 fn assert_transparent_fragments_listed(f: &Frame, what: &str) {
     let t = f.transparency.unwrap_or_else(|| panic!("{what}: no transparent pass"));

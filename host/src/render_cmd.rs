@@ -68,9 +68,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = crate::render::forward_plus::TileLists::Array)]
     pub fp_lists: crate::render::forward_plus::TileLists,
     /// How the transparent pass resolves each pixel's fragments (scenes with transparent
-    /// materials): `exact` (every layer sorted) or the `k1`/`k2`/`k4`/`k8` nearest sorted over
-    /// an order-independent average of the rest. Weighted blended OIT is not offered: the
-    /// `shaders::oit` resolve for it exists, its accumulation pass does not.
+    /// materials): `exact` (every layer sorted), the `k1`/`k2`/`k4`/`k8` nearest sorted over an
+    /// order-independent average of the rest, or `weighted` blended OIT (no lists, no sorting).
     #[arg(long, value_enum, default_value_t = crate::render::transparent::OitVariant::K4)]
     pub oit: crate::render::transparent::OitVariant,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).

@@ -72,6 +72,8 @@ pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
 /// Resolve of the transparent pass: heads, nodes, frame, counters (`transparency`).
 pub const OIT_RESOLVE: Kernel<OitParams> = linear("transparency::oit_resolve", 4);
+/// Resolve of the weighted blended variant: accumulation, revealage, frame.
+pub const OIT_RESOLVE_WEIGHTED: Kernel<OitParams> = linear("transparency::oit_resolve_weighted", 3);
 
 // Device-wide scan fix-ups (`entries.rs`).
 pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("entries::scan_add_offsets", 2);
@@ -151,6 +153,7 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_DEFERRED_DIFFUSE.erased(),
     SHADE_DEFERRED_SPECULAR.erased(),
     OIT_RESOLVE.erased(),
+    OIT_RESOLVE_WEIGHTED.erased(),
     SCAN_ADD_OFFSETS.erased(),
     SCAN_STORE_TOTAL.erased(),
     INDIRECT_ARGS.erased(),
@@ -274,6 +277,23 @@ pub const TRANSPARENT_SHADE: [[RasterKernel<TransparentParams>; 3]; 2] = [
     ],
 ];
 
+/// Storage buffers of the weighted blended pass's fragment stage: [`TRANSPARENT_FRAGMENT_BUFFERS`]
+/// without heads and nodes.
+pub const WEIGHTED_FRAGMENT_BUFFERS: u32 = 11;
+/// The weighted blended transparent pass (`--oit weighted`), as [`TRANSPARENT_SHADE`].
+pub const TRANSPARENT_WEIGHTED: [[RasterKernel<TransparentParams>; 3]; 2] = [
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::weighted_fs", WEIGHTED_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_textured", WEIGHTED_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_masked", WEIGHTED_FRAGMENT_BUFFERS, 2),
+    ],
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::weighted_fs_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_textured_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_masked_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 2),
+    ],
+];
+
 /// Every vertex entry point of the raster module (from the handles above).
 pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex];
 /// Every fragment entry point of the raster module (from the handles above).
@@ -299,4 +319,10 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     TRANSPARENT_SHADE[1][0].fragment,
     TRANSPARENT_SHADE[1][1].fragment,
     TRANSPARENT_SHADE[1][2].fragment,
+    TRANSPARENT_WEIGHTED[0][0].fragment,
+    TRANSPARENT_WEIGHTED[0][1].fragment,
+    TRANSPARENT_WEIGHTED[0][2].fragment,
+    TRANSPARENT_WEIGHTED[1][0].fragment,
+    TRANSPARENT_WEIGHTED[1][1].fragment,
+    TRANSPARENT_WEIGHTED[1][2].fragment,
 ];

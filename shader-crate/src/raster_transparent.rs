@@ -22,6 +22,11 @@
 //! 5. **Resolve** (compute, `transparency::oit_resolve`): per pixel, the list composited over the
 //!    opaque colour; the head is cleared for the next frame.
 //!
+//! Weighted blended OIT (McGuire & Bavoil 2013, `--oit weighted`) replaces steps 4–5: the
+//! fragments ([`weighted_fs`] …) blend `oit::weighted_fragment` into an additive accumulation
+//! target and a multiplicative revealage target, which `transparency::oit_resolve_weighted`
+//! composites over the opaque colour; no lists, no sorting.
+//!
 //! # Why a raster pre-pass marks the clusters
 //!
 //! The clustered techniques build lists only for clusters that some pixel's key names. A
@@ -38,7 +43,9 @@
 //! # Memory
 //!
 //! Heads 4 B per pixel, nodes 16 B per transparent fragment ([`OitNode`]), 4 counters; the key
-//! pre-pass adds nothing (the page table's marks and slots).
+//! pre-pass adds nothing (the page table's marks and slots). Weighted: 16 B (RGBA32F
+//! accumulation) + 4 B (R32F revealage) per pixel, each once as a target and once as a buffer,
+//! nothing per fragment.
 use crate::layout::*;
 use crate::octahedral::{self, Precision};
 use crate::oit;
@@ -181,6 +188,51 @@ pub fn transparent_fragment<const ALL_LIGHTS: bool>(
     nodes: &mut [OitNode],
     oit_counters: &mut [u32],
 ) {
+    let rgb = transparent_colour::<ALL_LIGHTS>(p, b, frag, in_normal, front_facing, texel, oit_counters);
+    let f = &p.frame;
+    let (px, py) = (frag.x as u32, frag.y as u32);
+    let alpha = b.materials[p.draw.material as usize].opacity;
+    let capacity = p.draw.capacity;
+    let index = atomic_add(&mut oit_counters[OIT_COUNTER_NODES as usize], 1);
+    let old = if oit::node_fits(index, capacity) { atomic_exchange(&mut heads[(py * f.grid.width + px) as usize], index) } else { OIT_END };
+    let n = oit::insert_node(old, index, capacity, rgb, alpha, frag.z, p.draw.first_primitive.wrapping_add(primitive));
+    if !n.overflow {
+        nodes[index as usize] = n.node;
+    }
+}
+
+/// The weighted blended variant of step 4 (McGuire & Bavoil 2013): the fragment's outputs into
+/// the accumulation and revealage targets (`oit::weighted_fragment`, view depth `near / z_buf`);
+/// counts the fragment.
+#[inline]
+pub fn weighted_transparent_fragment<const ALL_LIGHTS: bool>(
+    p: &TransparentParams,
+    b: &TransparentBuffers<'_>,
+    frag: Vec4,
+    in_normal: Vec3,
+    front_facing: bool,
+    texel: Vec3,
+    oit_counters: &mut [u32],
+) -> oit::WeightedFragment {
+    let rgb = transparent_colour::<ALL_LIGHTS>(p, b, frag, in_normal, front_facing, texel, oit_counters);
+    atomic_add(&mut oit_counters[OIT_COUNTER_NODES as usize], 1);
+    let alpha = b.materials[p.draw.material as usize].opacity;
+    oit::weighted_fragment(rgb, alpha, crate::reconstruct::distance_from_depth(p.frame.grid.near, frag.z))
+}
+
+/// The tonemapped colour of a transparent fragment over its cluster's list (`ALL_LIGHTS`: every
+/// light); a fragment whose cluster has no list is counted ([`OIT_COUNTER_UNLISTED`]) and lit by
+/// no light.
+#[inline]
+pub fn transparent_colour<const ALL_LIGHTS: bool>(
+    p: &TransparentParams,
+    b: &TransparentBuffers<'_>,
+    frag: Vec4,
+    in_normal: Vec3,
+    front_facing: bool,
+    texel: Vec3,
+    oit_counters: &mut [u32],
+) -> Vec3 {
     let f = &p.frame;
     let (px, py) = (frag.x as u32, frag.y as u32);
     let surface = fragment_surface(p, b.materials, frag, in_normal, front_facing, texel);
@@ -199,15 +251,7 @@ pub fn transparent_fragment<const ALL_LIGHTS: bool>(
             shade_sum(f, &surface, b.lights, &range, &mut sum)
         }
     };
-    let rgb = shading::lit_colour(f, sum, count);
-    let alpha = b.materials[p.draw.material as usize].opacity;
-    let capacity = p.draw.capacity;
-    let index = atomic_add(&mut oit_counters[OIT_COUNTER_NODES as usize], 1);
-    let old = if oit::node_fits(index, capacity) { atomic_exchange(&mut heads[(py * f.grid.width + px) as usize], index) } else { OIT_END };
-    let n = oit::insert_node(old, index, capacity, rgb, alpha, frag.z, p.draw.first_primitive.wrapping_add(primitive));
-    if !n.overflow {
-        nodes[index as usize] = n.node;
-    }
+    shading::lit_colour(f, sum, count)
 }
 
 /// Step 2: the cluster pre-pass of the transparent draws (both stages; [`mark_cluster`]).
@@ -223,10 +267,19 @@ pub fn transparent_keys_fs(
     mark_cluster(p, bounds, marks, page_base, slots, frag);
 }
 
-/// Declares one transparent fragment shader (its textures and texel, the binding list every
-/// variant shares; the vertex shaders are the G-buffer's) as a pair of entries: over the fragment's cluster list, and over every light (`_all_lights`).
+/// Declares one transparent fragment shader of each kind (its inputs, textures and texel; the
+/// vertex shaders are the G-buffer's), each as a pair of entries over the fragment's cluster list
+/// and over every light (`_all_lights`): the list pass (heads, nodes and OIT counters at 14–16,
+/// textures from 17) and the weighted blended pass (OIT counters at 14, textures from 15; outputs
+/// into the accumulation, location 0, and the revealage, location 1).
 macro_rules! transparent_entries {
-    ($clustered:ident, $all:ident, $imp:ident, ($($input:ident: $input_ty:ty),*), ($($tex:ident: $binding:literal),*), $texel:expr) => {
+    (
+        [$clustered:ident, $all:ident, $imp:ident],
+        [$w_clustered:ident, $w_all:ident, $w_imp:ident],
+        ($($input:ident: $input_ty:ty),*),
+        ($($tex:ident: $binding:literal | $w_binding:literal),*),
+        $texel:expr
+    ) => {
         variant_entries! {
             [fragment(early_fragment_tests)] $clustered: "over the fragment's cluster list.", $all: "over every light (the brute-force reference).";
             /// Transparent pass (module docs, step 4).
@@ -257,24 +310,54 @@ macro_rules! transparent_entries {
                 transparent_fragment::<ALL_LIGHTS>(p, &b, frag, in_normal, front_facing, texel, primitive, heads, nodes, oit_counters);
             }
         }
+
+        variant_entries! {
+            [fragment(early_fragment_tests)] $w_clustered: "over the fragment's cluster list.", $w_all: "over every light (the brute-force reference).";
+            /// Weighted blended transparent pass (module docs; `oit::weighted_fragment`).
+            fn $w_imp<const ALL_LIGHTS: bool>(
+                in_normal: Vec3,
+                $($input: $input_ty,)*
+                #[spirv(front_facing)] front_facing: bool,
+                #[spirv(frag_coord)] frag: Vec4,
+                #[spirv(push_constant)] p: &TransparentParams,
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] bounds: &[f32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] page_base: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] slot_rank: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] unique: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] cluster_counters: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] counts: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] offsets: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] list: &[u32],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] lights: &[PointLight],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] materials: &[MaterialGpu],
+                #[spirv(storage_buffer, descriptor_set = 0, binding = 14)] oit_counters: &mut [u32],
+                $(#[spirv(descriptor_set = 0, binding = $w_binding)] $tex: &Texture2d,)*
+                out_accum: &mut Vec4,
+                out_revealage: &mut f32,
+            ) {
+                let texel: Vec3 = $texel;
+                let b = TransparentBuffers { bounds, page_base, slot_rank, unique, cluster_counters, counts, offsets, list, lights, materials };
+                let w = weighted_transparent_fragment::<ALL_LIGHTS>(p, &b, frag, in_normal, front_facing, texel, oit_counters);
+                *out_accum = w.accum;
+                *out_revealage = w.alpha;
+            }
+        }
     };
 }
 
-transparent_entries!(transparent_fs, transparent_fs_all_lights, transparent_fs_impl, (), (), Vec3::ONE);
+transparent_entries!([transparent_fs, transparent_fs_all_lights, transparent_fs_impl], [weighted_fs, weighted_fs_all_lights, weighted_fs_impl], (), (), Vec3::ONE);
 transparent_entries!(
-    transparent_fs_textured,
-    transparent_fs_textured_all_lights,
-    transparent_fs_textured_impl,
+    [transparent_fs_textured, transparent_fs_textured_all_lights, transparent_fs_textured_impl],
+    [weighted_fs_textured, weighted_fs_textured_all_lights, weighted_fs_textured_impl],
     (in_uv: Vec2),
-    (albedo_map: 17),
+    (albedo_map: 17 | 15),
     sample_draw_uniform(albedo_map, in_uv).truncate()
 );
 transparent_entries!(
-    transparent_fs_masked,
-    transparent_fs_masked_all_lights,
-    transparent_fs_masked_impl,
+    [transparent_fs_masked, transparent_fs_masked_all_lights, transparent_fs_masked_impl],
+    [weighted_fs_masked, weighted_fs_masked_all_lights, weighted_fs_masked_impl],
     (in_uv: Vec2),
-    (albedo_map: 17, mask_map: 18),
+    (albedo_map: 17 | 15, mask_map: 18 | 16),
     {
         if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
             spirv_std::arch::demote_to_helper_invocation();

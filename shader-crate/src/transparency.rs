@@ -1,7 +1,8 @@
-//! The resolve of the transparent pass (steps: [`crate::raster_transparent`]; algebra, order and
+//! The resolves of the transparent pass (steps: [`crate::raster_transparent`]; algebra, order and
 //! bounds: [`crate::oit`]): one invocation per pixel walks the pixel's list, composites it over
 //! the opaque colour already in the frame (`oit::resolve` of the frame's variant), and clears
-//! the head for the next frame.
+//! the head for the next frame. The weighted blended variant's resolve composites its two
+//! targets instead ([`oit_resolve_weighted`]).
 //!
 //! Clearing the heads here costs one store to a word the resolve has just read (pixels with no
 //! list skip it); a fill at the frame's start would be one more pass writing 4 B per pixel, and
@@ -14,7 +15,7 @@ use crate::light_lists::AtomicAdd;
 use crate::lighting;
 use crate::oit;
 use crate::shading::linear_index;
-use spirv_std::glam::UVec3;
+use spirv_std::glam::{UVec3, Vec4};
 use spirv_std::spirv;
 
 /// A resolved pixel: its new frame word and what the resolve saw.
@@ -77,6 +78,35 @@ pub fn oit_resolve(
     }
 }
 
+/// The weighted blended composite of a pixel over the opaque frame word (`oit::weighted_resolve`):
+/// `accum` and `revealage` as the weighted pass's targets hold them (a pixel no fragment reached:
+/// 0 and 1, which gives the opaque word back).
+#[inline]
+pub fn resolve_weighted_pixel(accum: Vec4, revealage: f32, opaque: u32) -> u32 {
+    lighting::encode_srgb8(oit::weighted_resolve(accum, revealage, lighting::decode_srgb8(opaque)))
+}
+
+/// Resolve of the weighted blended variant: bindings accumulation (4 floats per pixel),
+/// revealage (1 per pixel), frame.
+#[spirv(compute(threads(256)))]
+pub fn oit_resolve_weighted(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local: u32,
+    #[spirv(push_constant)] p: &OitParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] accum: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] revealage: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] frame: &mut [u32],
+) {
+    let i = linear_index(wg, nwg, local);
+    if i >= p.width * p.height {
+        return;
+    }
+    let j = 4 * i as usize;
+    let a = Vec4::new(accum[j], accum[j + 1], accum[j + 2], accum[j + 3]);
+    frame[i as usize] = resolve_weighted_pixel(a, revealage[i as usize], frame[i as usize]);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,5 +134,16 @@ mod tests {
         let red = oit::over(premultiplied_rgba8(Vec3::X, 0.5), b);
         let want = oit::over(premultiplied_rgba8(Vec3::Y, 0.25), red);
         assert_eq!((r.word, r.layers, r.fallback), (lighting::encode_srgb8(want), 2, false));
+    }
+
+    #[test]
+    fn a_weighted_pixel_no_fragment_reached_keeps_its_opaque_word() {
+        for word in [0xff00_0000, 0xff12_3456, 0xffff_ffff, lighting::encode_srgb8(Vec3::new(0.2, 0.5, 0.9))] {
+            assert_eq!(resolve_weighted_pixel(Vec4::ZERO, 1.0, word), word);
+        }
+        let f = oit::weighted_fragment(Vec3::X, 0.5, 3.0);
+        let got = resolve_weighted_pixel(f.accum, 1.0 - f.alpha, 0xff00_0000);
+        assert_eq!(got, lighting::encode_srgb8(oit::weighted_resolve(f.accum, 1.0 - f.alpha, Vec3::ZERO)));
+        assert_ne!(got, 0xff00_0000, "one red layer over black shows");
     }
 }
