@@ -50,7 +50,8 @@ fn main() -> anyhow::Result<()> {
     let mut graphics = backend.to_spirv_builder(&crate_path, "spirv-unknown-vulkan1.3");
     configure(&mut graphics, "graphics");
     graphics.target_dir_path = Some("spirv-builder-graphics".into());
-    graphics.capabilities.push(Capability::DemoteToHelperInvocation);
+    // PrimitiveId in the transparent pass's fragment shaders needs the Geometry capability.
+    graphics.capabilities.extend([Capability::DemoteToHelperInvocation, Capability::Geometry]);
     let spv = graphics.build()?.module.unwrap_single().to_path_buf();
     println!("cargo::rustc-env=MANYLIGHTS_GRAPHICS_SPV={}", spv.display());
     Ok(())

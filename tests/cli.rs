@@ -112,6 +112,25 @@ fn render_forward_plus_with_array_lists() {
     assert!(stats["clusters"]["light_references"].as_u64().unwrap() > 0);
 }
 
+/// `--oit exact` reaches the transparent pass and its stats on a scene with transparent
+/// materials: the resolve is named, the fragments, the layers and the node buffer recorded.
+#[test]
+fn render_glass_with_exact_oit() {
+    let dir = TempDir::new("cli-oit");
+    let (png, json) = (dir.join("glass.png"), dir.join("glass.json"));
+    let (ok, _, err) = manylights(&[
+        "render", "--scene", "glass@stack", "--lights", "200", "--width", "64", "--height", "36", "--frames", "1",
+        "--technique", "clustered-bvh", "--oit", "exact", "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
+    ]);
+    assert!(ok, "render failed:\n{err}");
+    let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(stats["oit"], "exact");
+    let t = &stats["transparency"];
+    assert!(t["fragments"].as_u64().unwrap() > 0 && t["max_layers"].as_u64().unwrap() > 8, "{t}");
+    assert_eq!(t["unlisted_fragments"], 0, "{t}");
+    assert_eq!(stats["bytes"]["buffers"]["oit nodes"], t["node_bytes"], "{}", stats["bytes"]);
+}
+
 #[test]
 fn render_bad_input_is_a_one_line_error_with_status_2() {
     let dir = TempDir::new("cli-bad-render");
@@ -151,6 +170,7 @@ fn render_bad_input_is_a_one_line_error_with_status_2() {
         (vec!["--normal-precision", "f64"], vec!["'f64'", "oct8"]),
         (vec!["--technique", "forward-plus", "--fp-lists", "ring"], vec!["'ring'", "linked", "array"]),
         (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
+        (vec!["--oit", "k3"], vec!["'k3'", "exact", "weighted"]),
         (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
     ];
     for (extra, needles) in cases {

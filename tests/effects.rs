@@ -53,6 +53,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),
+        oit: Default::default(),
         width: WIDTH,
         height: HEIGHT,
         tile_size: 16,

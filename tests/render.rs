@@ -8,6 +8,7 @@ use common::render::{asset_scene, city, frame, render_error};
 use common::scenes::hard_light_cases;
 use host::gpu::Gpu;
 use host::render::sort::SortKind;
+use host::render::transparent::OitVariant;
 use host::render::{reference, Frame, Settings, Technique};
 use host::scene::{lights, Scene};
 use shaders::layout::PointLight;
@@ -23,6 +24,13 @@ fn settings(w: u32, h: u32, technique: Technique) -> Settings {
 /// what the clustered pipeline guarantees (`reference::check`: page-table compaction, complete
 /// light lists); returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
+    assert_equal_to_reference_with(gpu, scene, lights, &settings(w, h, Technique::Deferred), what)
+}
+
+/// [`assert_equal_to_reference`] from settings `base` (its technique replaced by each run's).
+fn assert_equal_to_reference_with(gpu: &Gpu, scene: &Scene, lights: &[PointLight], base: &Settings, what: &str) -> Frame {
+    let settings = |_w: u32, _h: u32, technique: Technique| Settings { technique, ..base.clone() };
+    let (w, h) = (base.width, base.height);
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let mut frames = Vec::new();
     let runs = [
@@ -56,16 +64,154 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     }
 }
 
-/// The glass scene through its stack (24 overlapping panes per pixel, drawn opaque until the
-/// renderer has a transparent pass) renders like any other.
+/// The glass scene through its stack (25 panes, 50 surfaces on the centre pixel): the clustered
+/// techniques with `--oit exact` equal the brute-force reference's transparent pass (every light
+/// per fragment, exact OIT) within 1/255, and every transparent fragment found its cluster's
+/// list (a fragment whose cluster the pre-pass did not mark is counted, and fails here).
 #[test]
 fn glass_stack_equals_the_reference() {
     let gpu = common::gpu();
     let scene = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
     assert!(scene.has_transparency());
-    let l = lights::uniform(&scene, 1_000, 29).unwrap();
-    let f = assert_equal_to_reference(&gpu, &scene, &l, 96, 54, "glass@stack");
+    let l = lights::uniform(&scene, 300, 29).unwrap();
+    let s = Settings { oit: OitVariant::Exact, ..settings(96, 54, Technique::Deferred) };
+    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "glass@stack");
     assert!(lit(&f.pixels) * 4 > f.pixels.len(), "glass@stack: the frame should be mostly lit");
+    assert_transparent_fragments_listed(&f, "glass@stack");
+}
+
+/// Weighted blended OIT (`--oit weighted`, no lists): the clustered techniques equal the
+/// reference's weighted pass within 1/255 on the glass stack, and every fragment found its list.
+#[test]
+fn weighted_oit_equals_the_reference() {
+    let gpu = common::gpu();
+    let scene = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let l = lights::uniform(&scene, 300, 29).unwrap();
+    let s = Settings { oit: OitVariant::Weighted, ..settings(96, 54, Technique::Deferred) };
+    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "glass@stack, weighted");
+    let t = f.transparency.unwrap();
+    assert!(t.fragments > 0 && t.unlisted == 0 && t.node_bytes == 0, "weighted: {t:?}");
+}
+
+/// The transparent pass ran, and every transparent fragment found its cluster's light list.
+fn assert_transparent_fragments_listed(f: &Frame, what: &str) {
+    let t = f.transparency.unwrap_or_else(|| panic!("{what}: no transparent pass"));
+    assert!(t.fragments > 0 && t.max_layers > 0, "{what}: {t:?}");
+    assert_eq!(t.unlisted, 0, "{what}: transparent fragments whose cluster has no light list: {t:?}");
+    assert_eq!(t.fallbacks, 0, "{what}: pixels past the exact resolve's bound: {t:?}");
+}
+
+/// Sponza with translucent curtains (`assets/sponza-curtains.toml`), when the assets are present:
+/// as the glass stack.
+#[test]
+fn sponza_curtains_equal_the_reference_when_present() {
+    let gpu = common::gpu();
+    if common::assets::asset("sponza").is_none() {
+        return;
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/sponza-curtains.toml");
+    let scene = Scene::load(path.to_str().unwrap(), &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(scene.has_transparency());
+    let l = lights::uniform(&scene, 300, 5).unwrap();
+    let s = Settings { oit: OitVariant::Exact, ..settings(96, 54, Technique::Deferred) };
+    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "sponza-curtains");
+    assert_transparent_fragments_listed(&f, "sponza-curtains");
+}
+
+/// The `--oit` knob reaches the resolve: on the glass stack (more than 8 layers on its centre
+/// pixels) every variant gives another image; where no pixel has more than 8 layers (the glass
+/// scene's street view with its shop windows only), `k8` equals `exact`.
+#[test]
+fn oit_variants_differ_and_k8_is_exact_up_to_8_layers() {
+    let gpu = common::gpu();
+    let dir = common::assets::dir();
+    let stack = Scene::load("glass@stack", &dir).unwrap_or_else(|e| panic!("{e:#}"));
+    let l = lights::uniform(&stack, 200, 3).unwrap();
+    let images: Vec<(OitVariant, Frame)> =
+        OitVariant::ALL.iter().map(|&oit| (oit, frame(&gpu, &stack, &l, &Settings { oit, ..settings(64, 36, Technique::ClusteredBvh) }))).collect();
+    let layers = images[0].1.transparency.unwrap().max_layers;
+    assert!(layers > 8, "glass@stack: the centre pixels hold {layers} layers, more than k = 8");
+    for (i, (a, fa)) in images.iter().enumerate() {
+        for (b, fb) in &images[i + 1..] {
+            assert_ne!(fa.pixels, fb.pixels, "glass@stack: --oit {} and {} give one image", a.name(), b.name());
+        }
+    }
+    let street = shop_windows_only(Scene::load("glass", &dir).unwrap_or_else(|e| panic!("{e:#}")));
+    let l = lights::uniform(&street, 200, 3).unwrap();
+    let exact = frame(&gpu, &street, &l, &Settings { oit: OitVariant::Exact, ..settings(64, 36, Technique::ClusteredBvh) });
+    let t = exact.transparency.unwrap();
+    assert!(t.max_layers > 1 && t.max_layers <= 8, "glass: {t:?}");
+    let k8 = frame(&gpu, &street, &l, &Settings { oit: OitVariant::K8, ..settings(64, 36, Technique::ClusteredBvh) });
+    assert_eq!(k8.pixels, exact.pixels, "glass: k8 differs from exact with at most {} layers", t.max_layers);
+    common::assert_clean(&gpu);
+}
+
+/// The glass scene without the panes that cross the avenue (the stack among them): of its
+/// transparent triangles, only those of the shop windows (thin in x, short of the stack).
+fn shop_windows_only(mut scene: Scene) -> Scene {
+    let transparent: Vec<bool> = scene.materials.iter().map(|m| m.is_transparent()).collect();
+    for m in scene.meshes.iter_mut().filter(|m| transparent[m.material as usize]) {
+        let p = &m.positions;
+        let window = |t: &[u32]| {
+            let xs = t.iter().map(|&i| p[i as usize][0]);
+            let (lo, hi) = xs.fold((f32::MAX, f32::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            hi - lo < 1.0 && lo.abs() > 3.5 && t.iter().all(|&i| p[i as usize][2] < 230.0)
+        };
+        m.indices = m.indices.chunks(3).filter(|t| window(t)).flatten().copied().collect();
+    }
+    scene
+}
+
+/// Only what the scene calls for: a scene without transparent materials records no transparent
+/// pass and allocates no OIT buffer (the stats file), one with them records both; the node
+/// buffer grows when the frame's fragments do not fit.
+#[test]
+fn transparent_pass_only_where_the_scene_has_transparency() {
+    let gpu = common::gpu();
+    let stats = |scene: &Scene, l: &[PointLight], f: &Frame, s: &Settings| host::render::stats::stats_json(&gpu.ctx.info, &scene.name, l.len(), s, f);
+    let s = Settings { read_back: true, ..settings(64, 36, Technique::ClusteredBvh) };
+    let city = city();
+    let l = lights::uniform(&city, 200, 3).unwrap();
+    let f = frame(&gpu, &city, &l, &s);
+    let j = stats(&city, &l, &f, &s);
+    let passes = j["gpu_ms"]["passes"].as_object().unwrap();
+    assert!(passes.keys().all(|p| p != "transparent" && p != "oit resolve"), "city: passes {:?}", passes.keys());
+    let buffers = j["bytes"]["buffers"].as_object().unwrap();
+    assert!(buffers.keys().all(|b| !b.starts_with("oit")), "city: buffers {:?}", buffers.keys());
+    assert!(j["transparency"].is_null() && j["oit"].is_null(), "city: {j}");
+    let glass = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let l = lights::uniform(&glass, 200, 3).unwrap();
+    let f = frame(&gpu, &glass, &l, &s);
+    let j = stats(&glass, &l, &f, &s);
+    let passes = j["gpu_ms"]["passes"].as_object().unwrap();
+    assert!(passes.contains_key("transparent") && passes.contains_key("oit resolve"), "glass: passes {:?}", passes.keys());
+    let t = f.transparency.unwrap();
+    assert_eq!(j["bytes"]["buffers"]["oit nodes"].as_u64(), Some(t.node_bytes), "glass: {j}");
+    assert_eq!(j["transparency"]["fragments"].as_u64(), Some(t.fragments as u64));
+    assert_eq!(j["oit"], "k4", "the default resolve");
+    assert!(16 * t.fragments as u64 <= t.node_bytes, "every fragment has a node: {t:?}");
+    // 64×36 pixels start with 2 nodes each (4608); the stack needs more, so the buffer grew.
+    assert!(f.regrowths >= 1 && t.fragments > 2 * 64 * 36, "glass@stack: {t:?}, {} regrowths", f.regrowths);
+    common::assert_clean(&gpu);
+}
+
+/// Techniques without the transparent pass refuse scenes with transparent materials, naming
+/// themselves and the materials, instead of drawing them opaque.
+#[test]
+fn techniques_without_a_transparent_pass_refuse_transparent_scenes() {
+    let gpu = common::gpu();
+    let glass = Scene::load("glass", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let l = lights::uniform(&glass, 50, 3).unwrap();
+    for &t in Technique::ALL {
+        let s = settings(32, 18, t);
+        if t.draws_transparency() {
+            frame(&gpu, &glass, &l, &s);
+            continue;
+        }
+        let err = render_error(&gpu, &glass, &l, Precision::Oct16, &s);
+        assert!(err.contains(t.name()) && err.contains("\"pane red\" (opacity 0.35)") && !err.contains('\n'), "{t:?}: {err}");
+    }
+    common::assert_clean(&gpu);
 }
 
 /// More lights than one lavapipe loop may iterate (65 535): the chunked light loops must still

@@ -67,6 +67,11 @@ pub struct RenderArgs {
     /// lavapipe).
     #[arg(long, value_enum, default_value_t = crate::render::forward_plus::TileLists::Array)]
     pub fp_lists: crate::render::forward_plus::TileLists,
+    /// How the transparent pass resolves each pixel's fragments (scenes with transparent
+    /// materials): `exact` (every layer sorted), the `k1`/`k2`/`k4`/`k8` nearest sorted over an
+    /// order-independent average of the rest, or `weighted` blended OIT (no lists, no sorting).
+    #[arg(long, value_enum, default_value_t = crate::render::transparent::OitVariant::K4)]
+    pub oit: crate::render::transparent::OitVariant,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -157,6 +162,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         async_compute: !a.no_async_compute,
         sort: a.sort,
         fp_lists: a.fp_lists,
+        oit: a.oit,
     };
     eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

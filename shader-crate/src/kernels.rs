@@ -70,6 +70,10 @@ pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::sha
 // Brute-force deferred reference (`deferred.rs`).
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
+/// Resolve of the transparent pass: heads, nodes, frame, counters (`transparency`).
+pub const OIT_RESOLVE: Kernel<OitParams> = linear("transparency::oit_resolve", 4);
+/// Resolve of the weighted blended variant: accumulation, revealage, frame.
+pub const OIT_RESOLVE_WEIGHTED: Kernel<OitParams> = linear("transparency::oit_resolve_weighted", 3);
 
 // Device-wide scan fix-ups (`entries.rs`).
 pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("entries::scan_add_offsets", 2);
@@ -148,6 +152,8 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_CLUSTERED_SPECULAR.erased(),
     SHADE_DEFERRED_DIFFUSE.erased(),
     SHADE_DEFERRED_SPECULAR.erased(),
+    OIT_RESOLVE.erased(),
+    OIT_RESOLVE_WEIGHTED.erased(),
     SCAN_ADD_OFFSETS.erased(),
     SCAN_STORE_TOTAL.erased(),
     INDIRECT_ARGS.erased(),
@@ -249,6 +255,45 @@ pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
     ],
 ];
 
+/// Cluster pre-pass of the transparent draws (`raster_transparent`): bounds, marks, page table,
+/// slots.
+pub const TRANSPARENT_KEYS: RasterKernel<TransparentParams> = RasterKernel::new("raster_forward::depth_vs", "raster_transparent::transparent_keys_fs", 4, 0);
+/// Storage buffers of the transparent pass's fragment stage (`raster_transparent`): bounds, page
+/// table, slot ranks, unique clusters, cluster counters, counts, offsets, list, lights,
+/// materials, heads, nodes, OIT counters.
+pub const TRANSPARENT_FRAGMENT_BUFFERS: u32 = 13;
+/// The transparent pass `[over the cluster lists, over every light][plain, textured, alpha-tested]`
+/// (variants and vertex shaders as [`GBUFFER`]).
+pub const TRANSPARENT_SHADE: [[RasterKernel<TransparentParams>; 3]; 2] = [
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::transparent_fs", TRANSPARENT_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::transparent_fs_textured", TRANSPARENT_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::transparent_fs_masked", TRANSPARENT_FRAGMENT_BUFFERS, 2),
+    ],
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::transparent_fs_all_lights", TRANSPARENT_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::transparent_fs_textured_all_lights", TRANSPARENT_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::transparent_fs_masked_all_lights", TRANSPARENT_FRAGMENT_BUFFERS, 2),
+    ],
+];
+
+/// Storage buffers of the weighted blended pass's fragment stage: [`TRANSPARENT_FRAGMENT_BUFFERS`]
+/// without heads and nodes.
+pub const WEIGHTED_FRAGMENT_BUFFERS: u32 = 11;
+/// The weighted blended transparent pass (`--oit weighted`), as [`TRANSPARENT_SHADE`].
+pub const TRANSPARENT_WEIGHTED: [[RasterKernel<TransparentParams>; 3]; 2] = [
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::weighted_fs", WEIGHTED_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_textured", WEIGHTED_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_masked", WEIGHTED_FRAGMENT_BUFFERS, 2),
+    ],
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_transparent::weighted_fs_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_textured_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_transparent::weighted_fs_masked_all_lights", WEIGHTED_FRAGMENT_BUFFERS, 2),
+    ],
+];
+
 /// Every vertex entry point of the raster module (from the handles above).
 pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex];
 /// Every fragment entry point of the raster module (from the handles above).
@@ -267,4 +312,17 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     FORWARD_SHADE[1][0].fragment,
     FORWARD_SHADE[1][1].fragment,
     FORWARD_SHADE[1][2].fragment,
+    TRANSPARENT_KEYS.fragment,
+    TRANSPARENT_SHADE[0][0].fragment,
+    TRANSPARENT_SHADE[0][1].fragment,
+    TRANSPARENT_SHADE[0][2].fragment,
+    TRANSPARENT_SHADE[1][0].fragment,
+    TRANSPARENT_SHADE[1][1].fragment,
+    TRANSPARENT_SHADE[1][2].fragment,
+    TRANSPARENT_WEIGHTED[0][0].fragment,
+    TRANSPARENT_WEIGHTED[0][1].fragment,
+    TRANSPARENT_WEIGHTED[0][2].fragment,
+    TRANSPARENT_WEIGHTED[1][0].fragment,
+    TRANSPARENT_WEIGHTED[1][1].fragment,
+    TRANSPARENT_WEIGHTED[1][2].fragment,
 ];

@@ -230,7 +230,8 @@ pub const MAX_MATERIALS: u32 = 256;
 pub struct MaterialGpu {
     pub specular: f32,
     pub roughness: f32,
-    /// In [0, 1], 1 opaque. No kernel reads it yet: every surface is shaded opaque.
+    /// In [0, 1], 1 opaque. Draws of materials below 1 leave the G-buffer and are drawn by the
+    /// transparent pass (`raster_transparent`), which stores it as their coverage α.
     pub opacity: f32,
     pub _pad: f32,
 }
@@ -514,3 +515,54 @@ pub struct OitParams {
 }
 const _: () = assert!(core::mem::size_of::<OitParams>() == 32);
 const _: () = assert!(core::mem::size_of::<OitParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+/// Counters of the transparent pass (a buffer of [`OIT_COUNTERS`] words, zeroed per frame).
+/// Transparent fragments the frame produced (the node counter: past the capacity, the node
+/// buffer grows and the frame re-runs).
+pub const OIT_COUNTER_NODES: u32 = 0;
+/// Most layers one pixel's list held (the resolve's atomic max).
+pub const OIT_COUNTER_MAX_LAYERS: u32 = 1;
+/// Pixels the exact resolve composited as k-nearest (more than `oit::MAX_EXACT_LAYERS` layers).
+pub const OIT_COUNTER_FALLBACKS: u32 = 2;
+/// Transparent fragments whose cluster had no light list (the cluster pre-pass failed to mark
+/// it); such a fragment is shaded with no light. Every test requires 0.
+pub const OIT_COUNTER_UNLISTED: u32 = 3;
+pub const OIT_COUNTERS: u32 = 4;
+
+/// `TransparentDraw::stage` of the cluster pre-pass (`raster_transparent::transparent_keys_fs`):
+/// mark the pages of the fragments' clusters (before the page scan) …
+pub const TRANSPARENT_MARK_PAGES: u32 = 0;
+/// … then set their slots (after the pages are allocated).
+pub const TRANSPARENT_STORE_SLOTS: u32 = 1;
+
+/// Per-draw push constants of the transparent passes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TransparentDraw {
+    /// Linear albedo of the material (multiplied with its texture when textured).
+    pub albedo: [f32; 3],
+    /// Material index (its specular, roughness and opacity).
+    pub material: u32,
+    /// `PRECISION_*` the frame's G-buffer normals use (the transparent normal is quantised the same).
+    pub normal_precision: u32,
+    /// Frame-unique id of the draw's first triangle (the transparent draws' triangles numbered in
+    /// draw order): the tie key of `OitNode::tie` is this + `PrimitiveId`.
+    pub first_primitive: u32,
+    /// Nodes the node buffer holds (`OitParams::capacity`).
+    pub capacity: u32,
+    /// Cluster pre-pass: `TRANSPARENT_MARK_PAGES` or `TRANSPARENT_STORE_SLOTS`.
+    pub stage: u32,
+}
+const _: () = assert!(core::mem::size_of::<TransparentDraw>() == 32);
+
+/// Push constants of the transparent raster passes: the frame's and the draw's.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TransparentParams {
+    pub frame: FrameParams,
+    pub draw: TransparentDraw,
+}
+const _: () = assert!(core::mem::size_of::<TransparentParams>() == 128);
+const _: () = assert!(core::mem::size_of::<TransparentParams>() <= MAX_PUSH_CONSTANT_BYTES);

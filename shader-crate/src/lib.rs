@@ -19,7 +19,8 @@
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 //! * [`lighting`] — culling tests, falloff, BRDF, tonemapping and output encoding.
 //! * [`oit`] — order-independent transparency: per-pixel linked lists (list building, exact and
-//!   k-nearest resolves) and weighted blended OIT.
+//!   k-nearest resolves) and weighted blended OIT; the transparent pass's fragment shaders
+//!   ([`raster_transparent`], graphics module) and its resolve kernel ([`transparency`]).
 //!
 //! Shared by the techniques (each technique module imports only these, never a sibling):
 //! * [`shading`] — shading I/O: pixel index, surface fetch, the light-list shading loop (the
@@ -106,6 +107,8 @@ pub mod radix;
 pub mod raster;
 #[cfg(feature = "graphics")]
 pub mod raster_forward;
+#[cfg(feature = "graphics")]
+pub mod raster_transparent;
 pub mod reconstruct;
 pub mod scan;
 pub mod shading;
@@ -119,6 +122,8 @@ mod test_support;
 pub mod tile_cull;
 #[cfg(feature = "compute")]
 pub mod tiled;
+#[cfg(feature = "compute")]
+pub mod transparency;
 
 #[cfg(not(target_arch = "spirv"))]
 pub mod kernels;

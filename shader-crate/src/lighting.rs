@@ -358,6 +358,25 @@ pub fn encode_srgb8(rgb: Vec3) -> u32 {
     srgb8(rgb.x) | (srgb8(rgb.y) << 8) | (srgb8(rgb.z) << 16) | 0xff00_0000
 }
 
+/// RGBA8 sRGB word → linear RGB (alpha ignored): the inverse of [`encode_srgb8`], whose encoding
+/// gives every word's colour bytes back (the transparency resolve composites over the opaque
+/// frame in linear colour).
+#[inline]
+pub fn decode_srgb8(word: u32) -> Vec3 {
+    Vec3::new(srgb8_to_linear(word & 255), srgb8_to_linear((word >> 8) & 255), srgb8_to_linear((word >> 16) & 255))
+}
+
+/// One sRGB-encoded byte → linear.
+#[inline]
+fn srgb8_to_linear(b: u32) -> f32 {
+    let e = b as f32 / 255.0;
+    if e <= 0.040_45 {
+        e / 12.92
+    } else {
+        ((e + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// Legend stop `s` (0..=6) of [`heat_ramp`].
 #[inline]
 fn heat_stop(s: u32) -> Vec3 {

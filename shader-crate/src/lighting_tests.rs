@@ -481,3 +481,13 @@ fn sphere_slack_covers_cross_machine_rounding() {
         r *= 2.0;
     }
 }
+
+#[test]
+fn srgb8_decode_is_the_inverse_of_the_encoding() {
+    for b in 0..256u32 {
+        let word = b | ((255 - b) << 8) | ((b * 7 % 256) << 16) | 0xff00_0000;
+        let linear = decode_srgb8(word);
+        assert!(linear.cmpge(Vec3::ZERO).all() && linear.cmple(Vec3::ONE).all(), "{word:#x} → {linear}");
+        assert_eq!(encode_srgb8(linear), word, "byte {b}");
+    }
+}

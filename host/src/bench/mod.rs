@@ -208,6 +208,7 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),
+        oit: Default::default(),
     };
     let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
     ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");

@@ -19,6 +19,9 @@
 //!    instead of walking again (H200, Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms;
 //!    0.211 with 32 staged).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
+//! 6. **transparency** (scenes with transparent draws, `transparent.rs`): inside steps 2 and 3 a
+//!    raster pre-pass of the transparent draws marks their fragments' pages, then slots, so
+//!    their clusters get lists; after step 5 the transparent pass and its resolve.
 //!
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs.
@@ -28,11 +31,11 @@
 //! light reference; scan scratch ≈ 1/128 of what it scans; the BVH (`bvh.rs`); `clustered-bvh`'s
 //! staged lists, 256 B per cluster for up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB).
 use super::bvh::LightBvh;
-use super::gbuffer::Targets;
 use super::scan::{Counted, DeviceScan};
 use super::technique::{grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
+use super::transparent::{ClusterInputs, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Recorder, VkResult};
+use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{bail, Context as _, Result};
 use shaders::clustered_bvh::{STAGED_CLUSTERS, STAGED_LIGHTS};
 use shaders::cluster_key::ClusterGrid;
@@ -44,6 +47,8 @@ pub struct Clustered {
     bvh: Option<LightBvh>,
     grid: ClusterGrid,
     buffers: ClusterBuffers,
+    /// The transparent pass, for scenes with transparent draws.
+    transparency: Option<Transparency>,
     /// `(unique clusters, light references, pages)` of the last frame.
     last: (u32, u32, u32),
 }
@@ -69,8 +74,9 @@ impl Clustered {
     fn new(gpu: &Gpu, f: &FrameInputs<'_>, bvh: Option<LightBvh>) -> Result<Self> {
         let grid = f.params.grid;
         let caps = Capacities::initial(&grid, f.params.num_lights);
-        let buffers = ClusterBuffers::new(gpu, &grid, caps, bvh.is_some()).context("allocating the cluster buffers")?;
-        Ok(Self { bvh, grid, buffers, last: (0, 0, 0) })
+        let transparency = Transparency::new(f, &gpu.ctx, false).context("creating the transparent pass")?;
+        let buffers = ClusterBuffers::new(gpu, &grid, caps, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
+        Ok(Self { bvh, grid, buffers, transparency, last: (0, 0, 0) })
     }
 }
 
@@ -87,17 +93,23 @@ impl LightingTechnique for Clustered {
 
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let p = FrameParams { light_capacity: self.buffers.caps.light_refs, ..f.params };
-        self.buffers.record(gpu, rec, &p, f.targets, f.bounds, f.lights, f.materials, f.frame, self.bvh.as_ref())
+        self.buffers.record(gpu, rec, &p, f, self.bvh.as_ref(), self.transparency.as_ref())
     }
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
-        let c: Vec<u32> = self.buffers.counters.read(COUNTERS as usize)?;
-        self.last = (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
-        let (_, refs, pages) = self.last;
-        let Some(caps) = self.buffers.caps.grown(pages, refs) else { return Ok(None) };
-        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps, self.bvh.is_some())
-            .with_context(|| format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs))?;
-        Ok(Some(format!("cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)))
+        let nodes = match self.transparency.as_mut() {
+            Some(t) => t.grow_if_needed(&gpu.ctx)?,
+            None => None,
+        };
+        let lists = self.grow_lists(gpu)?;
+        Ok(match (nodes, lists) {
+            (Some(a), Some(b)) => Some(format!("{a}, {b}")),
+            (a, b) => a.or(b),
+        })
+    }
+
+    fn transparency(&self) -> Option<TransparencyStats> {
+        self.transparency.as_ref().map(Transparency::stats)
     }
 
     fn stats(&mut self) -> Result<ListStats> {
@@ -108,12 +120,27 @@ impl LightingTechnique for Clustered {
     fn buffers(&self) -> Vec<(String, u64)> {
         let mut v: Vec<(String, u64)> = self.bvh.iter().map(|b| ("light bvh".to_string(), b.bytes())).collect();
         v.extend(self.buffers.sizes());
+        v.extend(self.transparency.iter().flat_map(Transparency::buffers));
         v
     }
 
     fn cluster_lists(&mut self) -> Result<Option<ClusterLists>> {
         let (unique, refs, _) = self.last;
         Ok(Some(self.buffers.read_back(self.grid.width * self.grid.height, unique, refs)?))
+    }
+}
+
+impl Clustered {
+    /// Reads the cluster counters of the last frame; grows the cluster buffers when a view-dependent
+    /// capacity was too small.
+    fn grow_lists(&mut self, gpu: &Gpu) -> Result<Option<String>> {
+        let c: Vec<u32> = self.buffers.counters.read(COUNTERS as usize)?;
+        self.last = (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
+        let (_, refs, pages) = self.last;
+        let Some(caps) = self.buffers.caps.grown(pages, refs) else { return Ok(None) };
+        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps, self.transparency.is_some(), self.bvh.is_some())
+            .with_context(|| format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs))?;
+        Ok(Some(format!("cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)))
     }
 }
 
@@ -182,13 +209,15 @@ struct ClusterBuffers {
 }
 
 impl ClusterBuffers {
-    /// Buffers for `grid` at `caps`; `staged`: with the stage of the BVH walks.
-    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, staged: bool) -> VkResult<Self> {
+    /// Buffers at `caps`; with `transparent`, transparent fragments add clusters of their own, so
+    /// the unique clusters are bounded by the slots, not by the pixels; `staged`: with the stage
+    /// of the BVH walks.
+    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, transparent: bool, staged: bool) -> VkResult<Self> {
         let ctx = &gpu.ctx;
         let pixels = grid.width * grid.height;
         let pages = page_count(grid);
         let slots = caps.slots();
-        let max_clusters = pixels.min(slots);
+        let max_clusters = if transparent { slots } else { pixels.min(slots) };
         let words = |name: &str, n: u32| {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::storage(ctx, name, 4 * n as u64)
@@ -233,21 +262,19 @@ impl ClusterBuffers {
         v
     }
 
-    /// Records steps 2–5 (keys … shading) of the clustered chain.
-    #[allow(clippy::too_many_arguments)]
-    /// With `bvh`, the assignment traverses the light BVH instead of testing every light.
+    /// Records steps 2–5 (keys … shading) of the clustered chain. With `bvh`, the assignment
+    /// traverses the light BVH instead of testing every light; with `transparency`, the
+    /// transparent draws mark their clusters inside steps 2–3 and are drawn after step 5.
     pub fn record(
         &self,
         gpu: &Gpu,
         rec: &mut Recorder<'_>,
         p: &FrameParams,
-        g: &Targets,
-        bounds: &Buffer,
-        lights: &Buffer,
-        materials: &Buffer,
-        frame: &Buffer,
+        f: &FrameInputs<'_>,
         bvh: Option<&super::bvh::LightBvh>,
+        transparency: Option<&Transparency>,
     ) -> VkResult<()> {
+        let (g, bounds, lights, materials, frame) = (f.targets, f.bounds, f.lights, f.materials, f.frame);
         let k = &gpu.kernels;
         let n = p.count;
         let with = |count: u32| FrameParams { count, ..*p };
@@ -255,12 +282,19 @@ impl ClusterBuffers {
         // (`record_pages`, `compact_clusters`): no fill at their capacity.
         rec.pass("keys", |rec| {
             rec.fill(&self.counters, 0);
-            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &self.marks], p, n)
+            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &self.marks], p, n)?;
+            match transparency {
+                Some(t) => t.record_clusters(rec, f, p, ImageUse::CopySource, TRANSPARENT_MARK_PAGES, &self.marks, &self.page_base, &self.slots),
+                None => Ok(()),
+            }
         })?;
         rec.pass("page table", |rec| {
             self.page_scan.record(gpu, rec, &self.marks, &self.page_base, self.page_count, Some((&self.counters, COUNTER_PAGES)))?;
             rec.dispatch_linear(&k.record_pages, &[&self.marks, &self.page_base, &self.page_of_alloc], &with(self.page_count), self.page_count)?;
             rec.dispatch_linear(&k.store_slots, &[&self.keys, &self.page_base, &self.slots], p, n)?;
+            if let Some(t) = transparency {
+                t.record_clusters(rec, f, p, ImageUse::DepthTarget, TRANSPARENT_STORE_SLOTS, &self.marks, &self.page_base, &self.slots)?;
+            }
             // The slots of the allocated pages only: scanned and compacted for the pages counted.
             let allocated = Counted { counter: COUNTER_PAGES, scale: PAGE_SIZE };
             self.slot_scan.record_counted(gpu, rec, &self.slots, &self.slot_rank, &self.counters, allocated, Some(COUNTER_UNIQUE_CLUSTERS))?;
@@ -314,7 +348,18 @@ impl ClusterBuffers {
                 p,
                 n,
             )
-        })
+        })?;
+        let Some(t) = transparency else { return Ok(()) };
+        let c = ClusterInputs {
+            page_base: &self.page_base,
+            slot_rank: &self.slot_rank,
+            unique: &self.unique,
+            counters: &self.counters,
+            counts: &self.counts,
+            offsets: &self.offsets,
+            list: &self.list,
+        };
+        t.record_shade(rec, f, p, ImageUse::DepthTarget, Some(&c))
     }
 
     /// Reads the cluster data back (tests, statistics).

@@ -1,15 +1,20 @@
 //! `deferred`: every light for every pixel after the G-buffer — the brute-force reference every
-//! other technique is checked against. One kernel (`shade_deferred`); no buffers of its own.
+//! other technique is checked against. One kernel (`shade_deferred`); no buffers of its own but
+//! those of the transparent pass (`transparent.rs`, every light for every transparent fragment
+//! and the `--oit` resolve), for scenes with transparent draws.
 use super::technique::{FrameInputs, LightingTechnique};
+use super::transparent::{Transparency, TransparencyStats};
 use crate::gpu::Gpu;
-use crate::vk::{Recorder, VkResult};
-use anyhow::Result;
+use crate::vk::{ImageUse, Recorder, VkResult};
+use anyhow::{Context as _, Result};
 
-pub struct Deferred;
+pub struct Deferred {
+    transparency: Option<Transparency>,
+}
 
 impl Deferred {
-    pub fn new(_gpu: &Gpu, _f: &FrameInputs<'_>) -> Result<Self> {
-        Ok(Self)
+    pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
+        Ok(Self { transparency: Transparency::new(f, &gpu.ctx, true).context("creating the transparent pass")? })
     }
 }
 
@@ -23,10 +28,25 @@ impl LightingTechnique for Deferred {
                 p,
                 p.count,
             )
-        })
+        })?;
+        match &self.transparency {
+            Some(tr) => tr.record_shade(rec, f, p, ImageUse::CopySource, None),
+            None => Ok(()),
+        }
+    }
+
+    fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
+        match self.transparency.as_mut() {
+            Some(t) => t.grow_if_needed(&gpu.ctx),
+            None => Ok(None),
+        }
+    }
+
+    fn transparency(&self) -> Option<TransparencyStats> {
+        self.transparency.as_ref().map(Transparency::stats)
     }
 
     fn buffers(&self) -> Vec<(String, u64)> {
-        Vec::new()
+        self.transparency.iter().flat_map(Transparency::buffers).collect()
     }
 }

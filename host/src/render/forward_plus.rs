@@ -22,7 +22,7 @@
 use super::technique::{grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
 use super::Draw;
 use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
-use crate::vk::{Attachment, Binding, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
+use crate::vk::{Attachment, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
 use shaders::forward_plus::{FP_COUNTER_REFS, MAX_LIGHTS_LLVMPIPE};
 use shaders::shading::NO_NODE;
@@ -165,12 +165,7 @@ impl ForwardPlus {
                 (false, _) => (0, 0),
                 (true, v) => (v, v),
             };
-            let bindings: Vec<Binding<'_>> = f
-                .geometry
-                .vertex_bindings(f.camera)
-                .chain(extra.iter().map(|b| Binding::Buffer(b)))
-                .chain(f.textures.bindings_of(draw, textures))
-                .collect();
+            let bindings = f.draw_bindings(extra, draw, textures);
             let push = ForwardParams { frame: FrameParams { light_capacity: self.capacity, count: index as u32, ..self.params.frame }, draw: draw.params };
             rec.draw_indexed(&pipes[variant], &bindings, &push, first_index, draw.index_count)?;
         }

@@ -10,7 +10,7 @@
 use crate::gpu::{normal_target, Gpu, ALBEDO_FORMAT, NORMAL_FORMATS};
 use crate::vk::image::upload_rgba8;
 use crate::vk::{Attachment, Binding, Buffer, Context, Image, ImageUse, Load, Recorder, Sampler, TargetFormat, VkResult};
-use shaders::layout::{DrawParams, RasterCamera};
+use shaders::layout::{DrawParams, MaterialGpu, RasterCamera};
 use shaders::octahedral::Precision;
 
 /// One draw: a range of the merged index buffer, its material and its textures (indices into
@@ -34,6 +34,11 @@ impl Draw {
             (None, None) => 0,
         }
     }
+}
+
+/// Whether a draw's material lets light through (opacity below 1; a missing material is opaque).
+pub fn is_transparent(d: &Draw, materials: &[MaterialGpu]) -> bool {
+    materials.get(d.params.material as usize).is_some_and(|m| m.opacity < 1.0)
 }
 
 /// Texels of one texture, as the scene loaded them.
@@ -87,17 +92,23 @@ pub struct Geometry {
     pub normals: Buffer,
     pub uvs: Buffer,
     pub indices: Buffer,
+    /// Draws of opaque materials (opacity 1): the G-buffer's.
     pub draws: Vec<Draw>,
+    /// Draws of transparent materials (opacity below 1), in scene order: the transparent pass's.
+    pub transparent: Vec<Draw>,
 }
 
 impl Geometry {
-    pub fn upload(ctx: &Context, positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u32], draws: Vec<Draw>) -> VkResult<Self> {
+    /// Uploads the merged buffers and splits `draws` by their material's opacity (`materials`).
+    pub fn upload(ctx: &Context, positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u32], draws: &[Draw], materials: &[MaterialGpu]) -> VkResult<Self> {
+        let (transparent, draws) = draws.iter().copied().filter(|d| d.index_count > 0).partition(|d| is_transparent(d, materials));
         Ok(Self {
             positions: Buffer::from_slice(ctx, "positions", positions)?,
             normals: Buffer::from_slice(ctx, "normals", normals)?,
             uvs: Buffer::from_slice(ctx, "uvs", uvs)?,
             indices: Buffer::indices(ctx, "indices", indices)?,
             draws,
+            transparent,
         })
     }
 
@@ -115,7 +126,8 @@ impl Geometry {
 pub struct Targets {
     pub width: u32,
     pub height: u32,
-    depth: Image,
+    /// The opaque depth target; the transparent pass tests against it.
+    pub depth: Image,
     normal: Image,
     albedo: Image,
     /// Reversed-Z depth (`f32`), one word per pixel.

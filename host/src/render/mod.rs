@@ -3,7 +3,9 @@
 //! Every technique has one shape ([`technique::LightingTechnique`]: create → record → grow →
 //! report) and lives in its own file: `deferred.rs` (the brute-force reference), `clustered.rs`
 //! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
-//! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`. The frame loop
+//! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`; `transparent.rs`
+//! is the transparent pass `deferred` and the clustered techniques add for scenes with transparent
+//! materials (the others refuse such scenes: [`Technique::draws_transparency`]). The frame loop
 //! ([`render`]) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
 //! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
 //! frames, growth and re-run (at most [`technique::MAX_REGROWTHS`] times; a frame never drops a
@@ -41,6 +43,7 @@ pub mod sort;
 pub mod stats;
 pub mod technique;
 pub mod tiled;
+pub mod transparent;
 
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler, Queue};
@@ -65,6 +68,12 @@ macro_rules! techniques {
         impl Technique {
             /// Every technique, in registration order.
             pub const ALL: &'static [Technique] = &[$(Technique::$variant),*];
+
+            /// Whether the technique draws transparent materials (the transparent pass of
+            /// `transparent.rs`); the others refuse scenes that have them.
+            pub fn draws_transparency(self) -> bool {
+                matches!(self, Self::Deferred | Self::ClusteredNaive | Self::ClusteredBvh)
+            }
 
             /// The command-line name.
             pub fn name(self) -> &'static str {
@@ -118,6 +127,8 @@ pub struct SceneInput<'a> {
     pub near: f32,
     pub far: f32,
     pub effects: u32,
+    /// Material names (by material index; may be shorter than `materials`), for messages.
+    pub material_names: Vec<String>,
 }
 
 /// How to render.
@@ -145,6 +156,8 @@ pub struct Settings {
     pub sort: sort::SortKind,
     /// Layout of the per-tile light lists (`forward-plus`).
     pub fp_lists: forward_plus::TileLists,
+    /// How transparent fragments are resolved (`--oit`; scenes with transparent materials).
+    pub oit: transparent::OitVariant,
 }
 
 /// GPU results kept for checks and statistics.
@@ -165,6 +178,9 @@ pub struct Readback {
     pub bounds: Vec<f32>,
     /// Each screen tile's light list as the GPU stored it (`forward-plus`; empty otherwise).
     pub tile_lists: Vec<Vec<u32>>,
+    /// The scene has transparent draws: their fragments add clusters of their own, so the unique
+    /// clusters hold the opaque pixels' and more.
+    pub transparent: bool,
 }
 
 /// A rendered frame.
@@ -191,6 +207,8 @@ pub struct Frame {
     /// The technique's light-only passes (`clustered-bvh`: light sort and BVH build) ran on the
     /// async-compute queue, overlapping the G-buffer raster ([`Frame::gpu_frame`] spans both).
     pub overlapped: bool,
+    /// The transparent pass of the last frame (`None`: the scene has no transparent draws).
+    pub transparency: Option<transparent::TransparencyStats>,
 }
 
 impl Frame {
@@ -239,8 +257,11 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let n = s.width * s.height;
     let lights_view = lights_to_view(&scene.view, scene.lights)?;
     let positions = scene.view.relative_positions(scene.positions);
-    let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, scene.draws.clone())
+    let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, &scene.draws, &scene.materials)
         .context("uploading geometry")?;
+    if !geometry.transparent.is_empty() && !s.technique.draws_transparency() {
+        bail!("{}", transparent::refusal(s.technique, &geometry.transparent, &scene.material_names, &scene.materials));
+    }
     let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
     let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
     let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
@@ -318,6 +339,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         f += 1;
     }
     let lists = tech.stats()?;
+    let transparency = tech.transparency();
     buffers.extend(tech.buffers());
     let cluster_lists = if s.read_back { tech.cluster_lists()? } else { None };
     let tile_lists = if s.read_back { tech.tile_lists()?.unwrap_or_default() } else { Vec::new() };
@@ -333,7 +355,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             .collect();
         let albedo: Vec<u32> = targets.albedo_buf.read(n as usize)?;
         let c = cluster_lists.unwrap_or(technique::ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
-        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds, tile_lists })
+        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds, tile_lists, transparent: !geometry.transparent.is_empty() })
     } else {
         None
     };
@@ -352,6 +374,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         readback,
         grid,
         overlapped,
+        transparency,
     })
 }
 

@@ -24,6 +24,12 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "technique": format!("{:?}", s.technique),
         // The per-tile list layout (`--fp-lists`) where the technique has one.
         "fp_lists": (s.technique == super::Technique::ForwardPlus).then(|| s.fp_lists.name()),
+        // The transparent pass, where the scene has transparent draws: the resolve (`--oit`),
+        // fragments (the node counter), the most layers of a pixel, node-buffer bytes.
+        "oit": frame.transparency.map(|_| s.oit.name()),
+        "transparency": frame.transparency.map(|t| json!({
+            "fragments": t.fragments, "max_layers": t.max_layers, "exact_fallback_pixels": t.fallbacks,
+            "unlisted_fragments": t.unlisted, "node_bytes": t.node_bytes })),
         "resolution": [s.width, s.height],
         "tile_size": s.tile_size,
         "slices": frame.grid.num_slices,

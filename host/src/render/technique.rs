@@ -13,10 +13,10 @@
 //! 4. **report**: [`LightingTechnique::stats`] (light lists of the last frame),
 //!    [`LightingTechnique::buffers`] (bytes per buffer) and, for CPU checks,
 //!    [`LightingTechnique::cluster_lists`] and [`LightingTechnique::tile_lists`].
-use super::gbuffer::{Geometry, Targets, Textures};
+use super::gbuffer::{Draw, Geometry, Targets, Textures};
 use super::Settings;
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Recorder, VkResult};
+use crate::vk::{Binding, Buffer, Recorder, VkResult};
 use anyhow::Result;
 use shaders::layout::{FrameParams, PointLight};
 
@@ -57,6 +57,18 @@ pub struct FrameInputs<'a> {
     pub bounds: &'a Buffer,
     /// The output frame (one packed RGBA8 word per pixel).
     pub frame: &'a Buffer,
+}
+
+impl FrameInputs<'_> {
+    /// The bindings of a draw of a raster pass: the vertex stage's storage buffers, `extra`
+    /// storage buffers of the fragment stage, then the draw's `textures` (0, 1 or 2).
+    pub fn draw_bindings<'b>(&'b self, extra: &[&'b Buffer], draw: &Draw, textures: usize) -> Vec<Binding<'b>> {
+        self.geometry
+            .vertex_bindings(self.camera)
+            .chain(extra.iter().map(|b| Binding::Buffer(b)))
+            .chain(self.textures.bindings_of(draw, textures))
+            .collect()
+    }
 }
 
 /// The light lists of the last frame (0 where a technique has no such thing).
@@ -112,6 +124,11 @@ pub trait LightingTechnique {
     /// The light lists of the last frame.
     fn stats(&mut self) -> Result<ListStats> {
         Ok(ListStats::default())
+    }
+
+    /// What the transparent pass of the last frame did (`None`: the frame had none).
+    fn transparency(&self) -> Option<super::transparent::TransparencyStats> {
+        None
     }
 
     /// Bytes of each buffer the technique owns.

@@ -3,7 +3,7 @@
 //!
 //! 1. [`flatten`] merges the meshes into one vertex/index set with one draw per mesh, the
 //!    materials into the G-buffer's material table (at most [`MAX_MATERIALS`]; each entry carries
-//!    the material's opacity, which no pass reads yet), and marks the textures a draw samples —
+//!    the material's opacity: draws below 1 go to the transparent pass), and marks the textures a draw samples —
 //!    only where the scene's effects ask for them.
 //! 2. [`scene_input`] borrows the flattened arrays, the lights and the textures into a
 //!    [`SceneInput`] with the camera.
@@ -91,5 +91,6 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
         near: c.near,
         far: c.far,
         effects: scene.effects.flags(),
+        material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
     }
 }

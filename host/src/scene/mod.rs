@@ -8,7 +8,8 @@
 //!
 //! Transparency: a [`Material`] has an opacity (MTL `d` / `Tr`, a description's `[[material]]`
 //! override, the `glass` scene's panes); [`Scene::has_transparency`] says whether any mesh uses a
-//! transparent one. The renderer draws every surface opaque for now.
+//! transparent one. The renderer draws those meshes in its transparent pass (`render::transparent`;
+//! the techniques without one refuse such scenes).
 //!
 //! Conventions: right-handed, y up, counter-clockwise front faces seen from outside; units are
 //! whatever the geometry uses (the procedural scenes use metres, Sponza its original Crytek
@@ -91,8 +92,8 @@ pub struct Material {
     pub alpha_mask_texture: Option<PathBuf>,
     /// Opacity in [0, 1]: 1 is opaque (the default), 0 lets everything through. From MTL `d`, or
     /// `1 − Tr` ([`wavefront`] says which wins and how Sponza's `d 0` is read), or a
-    /// description's `[[material]]` override. Until the renderer has a transparent pass it draws
-    /// every surface opaque, whatever its opacity.
+    /// description's `[[material]]` override. Meshes below 1 are drawn by the transparent pass
+    /// (`render::transparent`).
     pub opacity: f32,
 }
 

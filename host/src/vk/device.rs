@@ -181,6 +181,11 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     if f10.shader_int64 == 0 {
         missing.push("shaderInt64".into());
     }
+    // The transparent pass: fragment shaders append to per-pixel lists and read PrimitiveId;
+    // weighted blended OIT blends its two targets differently.
+    if f10.fragment_stores_and_atomics == 0 || f10.geometry_shader == 0 || f10.independent_blend == 0 {
+        missing.push("fragmentStoresAndAtomics + geometryShader (PrimitiveId in fragment shaders) + independentBlend".into());
+    }
     if !has_push {
         missing.push("VK_KHR_push_descriptor".into());
     }
@@ -269,7 +274,7 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
         .synchronization2(true)
         .dynamic_rendering(true)
         .shader_demote_to_helper_invocation(true);
-    let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+    let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true).fragment_stores_and_atomics(true).geometry_shader(true).independent_blend(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
     let exts = [khr::push_descriptor::NAME.as_ptr()];
     let create = vk::DeviceCreateInfo::default()

@@ -166,6 +166,12 @@ impl Recorder<'_> {
         Ok(())
     }
 
+    /// Makes the storage-buffer writes of earlier fragment shaders visible to later kernels,
+    /// copies and host reads (the transparent pass's lists and counters).
+    pub fn kernels_read_fragment_writes(&mut self) {
+        barrier(self.ctx, self.cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::FRAGMENT_SHADER);
+    }
+
     /// Ends the raster pass begun by [`Recorder::begin_rendering`].
     pub fn end_rendering(&mut self) {
         unsafe { self.ctx.device.cmd_end_rendering(self.cmd) };
@@ -185,11 +191,12 @@ impl Recorder<'_> {
     }
 
     /// Makes earlier kernel writes and buffer fills/copies visible to the fragment shaders of
-    /// later raster passes (e.g. light lists read per fragment).
+    /// later raster passes (e.g. light lists read per fragment, page tables and counters the
+    /// transparent pass writes to).
     pub fn fragments_read_earlier_writes(&mut self) {
         let b = vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::SHADER_READ);
+            .dst_access_mask(vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
         unsafe {
             self.ctx.device.cmd_pipeline_barrier(
                 self.cmd,

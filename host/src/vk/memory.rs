@@ -80,10 +80,16 @@ impl Buffer {
     /// A device-local storage buffer of `size` bytes, zero once at creation: for buffers whose
     /// kernels clear what they used, so that no frame clears them at capacity.
     pub fn zeroed(ctx: &Context, name: &str, size: u64) -> VkResult<Self> {
+        Self::filled(ctx, name, size, 0)
+    }
+
+    /// A device-local storage buffer of `size` bytes, every word `value` once at creation (as
+    /// [`Buffer::zeroed`]).
+    pub fn filled(ctx: &Context, name: &str, size: u64, value: u32) -> VkResult<Self> {
         let b = Self::storage(ctx, name, size)?;
         let dst = b.raw;
         ctx.submit_and_wait(|cmd| {
-            unsafe { ctx.device.cmd_fill_buffer(cmd, dst, 0, vk::WHOLE_SIZE, 0) };
+            unsafe { ctx.device.cmd_fill_buffer(cmd, dst, 0, vk::WHOLE_SIZE, value) };
             barrier(ctx, cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
             Ok(())
         })?;

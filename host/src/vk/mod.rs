@@ -30,4 +30,4 @@ pub use memory::{Buffer, MemoryLocation};
 pub use draw::{Attachment, Binding, ImageUse, Load};
 pub use pipeline::{fold, ComputePipeline, Recorder, ShaderModule, MAX_GROUPS_PER_AXIS};
 pub use profiler::{PassTiming, Profiler, Queue};
-pub use raster::{DepthTest, GraphicsPipeline, TargetFormat};
+pub use raster::{Blend, DepthTest, GraphicsPipeline, TargetFormat};

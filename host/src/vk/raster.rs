@@ -20,6 +20,10 @@ pub enum TargetFormat {
     Rgba8Unorm,
     /// 32-bit float depth (reversed Z).
     Depth32,
+    /// Four 32-bit floats (weighted blended OIT's accumulation).
+    Rgba32Float,
+    /// One 32-bit float (weighted blended OIT's revealage).
+    R32Float,
 }
 
 impl TargetFormat {
@@ -29,6 +33,8 @@ impl TargetFormat {
             Self::Rgba32Uint => vk::Format::R32G32B32A32_UINT,
             Self::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
             Self::Depth32 => vk::Format::D32_SFLOAT,
+            Self::Rgba32Float => vk::Format::R32G32B32A32_SFLOAT,
+            Self::R32Float => vk::Format::R32_SFLOAT,
         }
     }
 
@@ -39,7 +45,7 @@ impl TargetFormat {
     /// Bytes per pixel.
     pub fn bytes(self) -> u64 {
         match self {
-            Self::Rgba32Uint => 16,
+            Self::Rgba32Uint | Self::Rgba32Float => 16,
             _ => 4,
         }
     }
@@ -52,6 +58,20 @@ pub enum DepthTest {
     NearestWrites,
     /// Pass fragments at exactly the stored depth (a pass over a pre-pass's depth); no writes.
     EqualReadOnly,
+    /// Pass fragments nearer than the stored depth (transparent surfaces in front of the opaque
+    /// ones); no writes.
+    NearerReadOnly,
+}
+
+/// How a colour target combines a fragment's output with what it holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blend {
+    /// The output replaces it.
+    Replace,
+    /// Added to it (`ONE, ONE`): weighted blended OIT's accumulation.
+    Add,
+    /// It is multiplied by one minus the output (`ZERO, ONE_MINUS_SRC_COLOR`): the revealage.
+    Revealage,
 }
 
 /// A raster pipeline for handle `RasterKernel<P>`: drawing with it takes a `&P`.
@@ -66,6 +86,13 @@ pub struct GraphicsPipeline<P> {
 impl<P> GraphicsPipeline<P> {
     /// A pipeline drawing `kernel` into colour targets of `colours` and a depth target.
     pub fn new(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[TargetFormat], depth: DepthTest) -> VkResult<Self> {
+        let replace: Vec<(TargetFormat, Blend)> = colours.iter().map(|&c| (c, Blend::Replace)).collect();
+        Self::blended(ctx, module, name, kernel, &replace, depth)
+    }
+
+    /// A pipeline drawing `kernel` into colour targets of the given formats and blending, and a
+    /// depth target.
+    pub fn blended(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest) -> VkResult<Self> {
         let d = &ctx.device;
         let binding = |b: u32, ty: vk::DescriptorType, stage: vk::ShaderStageFlags| {
             vk::DescriptorSetLayoutBinding::default().binding(b).descriptor_type(ty).descriptor_count(1).stage_flags(stage)
@@ -110,13 +137,32 @@ impl<P> GraphicsPipeline<P> {
         let (compare, write) = match depth {
             DepthTest::NearestWrites => (vk::CompareOp::GREATER, true),
             DepthTest::EqualReadOnly => (vk::CompareOp::EQUAL, false),
+            DepthTest::NearerReadOnly => (vk::CompareOp::GREATER, false),
         };
         let depth_state = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(true).depth_write_enable(write).depth_compare_op(compare);
-        let blend: Vec<_> = colours.iter().map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)).collect();
+        let blend: Vec<_> = colours
+            .iter()
+            .map(|&(_, b)| {
+                let state = vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA);
+                let (src, dst) = match b {
+                    Blend::Replace => return state,
+                    Blend::Add => (vk::BlendFactor::ONE, vk::BlendFactor::ONE),
+                    Blend::Revealage => (vk::BlendFactor::ZERO, vk::BlendFactor::ONE_MINUS_SRC_COLOR),
+                };
+                state
+                    .blend_enable(true)
+                    .src_color_blend_factor(src)
+                    .dst_color_blend_factor(dst)
+                    .color_blend_op(vk::BlendOp::ADD)
+                    .src_alpha_blend_factor(src)
+                    .dst_alpha_blend_factor(dst)
+                    .alpha_blend_op(vk::BlendOp::ADD)
+            })
+            .collect();
         let blend_state = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
         let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
-        let formats: Vec<vk::Format> = colours.iter().map(|f| f.raw()).collect();
+        let formats: Vec<vk::Format> = colours.iter().map(|(f, _)| f.raw()).collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&formats)
             .depth_attachment_format(TargetFormat::Depth32.raw());

@@ -1,0 +1,358 @@
+//! The transparent pass: draws of materials with opacity below 1, left out of the G-buffer,
+//! shaded per fragment over the technique's light lists and composited with per-pixel linked
+//! lists (Yang, Hensley, Grün, Thibieroz 2010, "Real-Time Concurrent Linked List Construction on
+//! the GPU", EGSR), resolved exactly or keeping the k nearest sorted (the compute-shader OIT
+//! article's insertion sort into a k = 4 register array, here k = 1, 2, 4 or 8 by `--oit`).
+//!
+//! Steps (`shaders::raster_transparent` has the kernels' side and why the clusters are marked by
+//! a raster pre-pass):
+//! 1. **cluster pre-pass** (clustered techniques): [`Transparency::record_clusters`] twice, inside
+//!    the page-table steps: the transparent draws mark their clusters' pages, then their slots;
+//! 2. **transparent pass** ([`Transparency::record_shade`], after the opaque shading): raster
+//!    over the opaque depth (GREATER, no writes, no blending, early fragment tests), each
+//!    fragment shaded over its cluster's list (`deferred`: every light) and inserted into its
+//!    pixel's list;
+//! 3. **resolve** (compute, one invocation per pixel): the list over the opaque frame colour; it
+//!    clears each head it read (cheaper than a fill of every head at the frame's start: a store
+//!    to a word just read, and only where a list exists). The heads are filled once, at
+//!    allocation.
+//!
+//! `--oit weighted` (McGuire & Bavoil 2013, "Weighted Blended Order-Independent Transparency")
+//! replaces the lists of steps 2–3: the fragments blend into an additive accumulation target
+//! and a multiplicative revealage target ([`WEIGHTED_TARGETS`]), copied into buffers that the
+//! weighted resolve composites over the opaque colour.
+//!
+//! The node counter is read back after the frame: past the node buffer's capacity the buffer
+//! grows to the need + 25 % and the frame re-runs (never a silent drop).
+//!
+//! Memory: heads 4 B per pixel, nodes 16 B per transparent fragment (first guess: two per pixel,
+//! within one storage-buffer range; it grows), 16 B of counters; weighted: 20 B per pixel as
+//! targets and 20 B as buffers, no lists. A scene without transparent draws allocates none of it and
+//! creates none of its pipelines.
+use super::gbuffer::Draw;
+use super::technique::{grown_capacity, FrameInputs};
+use super::Technique;
+use crate::gpu::{COMPUTE_SPV, GRAPHICS_SPV};
+use crate::vk::{Attachment, Blend, Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, Load, Recorder, ShaderModule, TargetFormat, VkResult};
+use anyhow::{Context as _, Result};
+use shaders::kernels;
+use shaders::layout::*;
+use shaders::oit::MAX_K;
+
+/// How a pixel's transparent fragments are resolved (`--oit`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum OitVariant {
+    /// Every fragment sorted, far to near (exact up to `shaders::oit::MAX_EXACT_LAYERS` layers).
+    Exact,
+    /// The nearest fragment sorted over an order-independent average of the others.
+    K1,
+    K2,
+    /// The 4 nearest sorted (the default).
+    #[default]
+    K4,
+    K8,
+    /// Weighted blended OIT (McGuire & Bavoil 2013): no lists, no sorting; an approximation.
+    Weighted,
+}
+
+impl OitVariant {
+    pub const ALL: [OitVariant; 6] = [Self::Exact, Self::K1, Self::K2, Self::K4, Self::K8, Self::Weighted];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Exact => "exact",
+            Self::K1 => "k1",
+            Self::K2 => "k2",
+            Self::K4 => "k4",
+            Self::K8 => "k8",
+            Self::Weighted => "weighted",
+        }
+    }
+
+    /// `(OitParams::variant, OitParams::k)`.
+    pub fn params(self) -> (u32, u32) {
+        match self {
+            Self::Exact => (OIT_EXACT, MAX_K),
+            Self::K1 => (OIT_K_NEAREST, 1),
+            Self::K2 => (OIT_K_NEAREST, 2),
+            Self::K4 => (OIT_K_NEAREST, 4),
+            Self::K8 => (OIT_K_NEAREST, 8),
+            Self::Weighted => (OIT_WEIGHTED, MAX_K),
+        }
+    }
+}
+
+/// Weighted blended OIT's colour targets: additive accumulation `(Σ C·w, Σ α·w)` and the
+/// revealage `Π (1 − α)` (cleared to 1). Float32 rather than the paper's RGBA16F + R8: no
+/// overflow past a few dozen heavy layers, and the resolve reads plain floats.
+const WEIGHTED_TARGETS: [(TargetFormat, Blend); 2] = [(TargetFormat::Rgba32Float, Blend::Add), (TargetFormat::R32Float, Blend::Revealage)];
+
+/// The error of a technique without the transparent pass for a scene with transparent draws.
+pub fn refusal(t: Technique, transparent: &[Draw], names: &[String], materials: &[MaterialGpu]) -> String {
+    let mut used: Vec<u32> = transparent.iter().map(|d| d.params.material).collect();
+    used.sort_unstable();
+    used.dedup();
+    let listed: Vec<String> = used
+        .iter()
+        .map(|&m| {
+            let name = names.get(m as usize).map_or_else(|| format!("material {m}"), |n| format!("{n:?}"));
+            format!("{name} (opacity {})", materials.get(m as usize).map_or(1.0, |x| x.opacity))
+        })
+        .collect();
+    format!(
+        "{} has no transparent pass and would draw the scene's transparent materials opaque: {}; use deferred, clustered-naive or clustered-bvh",
+        t.name(),
+        listed.join(", ")
+    )
+}
+
+/// What the transparent pass of the last frame did (the stats file's `transparency`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TransparencyStats {
+    /// Transparent fragments (the node counter).
+    pub fragments: u32,
+    /// Most layers of one pixel (0 with `weighted`: no lists).
+    pub max_layers: u32,
+    /// Pixels the exact resolve composited as k-nearest (past its layer bound).
+    pub fallbacks: u32,
+    /// Transparent fragments whose cluster had no light list (0 unless the marking is broken).
+    pub unlisted: u32,
+    /// Bytes of the node buffer (0 with `weighted`).
+    pub node_bytes: u64,
+}
+
+/// The cluster data a transparent fragment reads (the clustered techniques' buffers).
+pub struct ClusterInputs<'a> {
+    pub page_base: &'a Buffer,
+    pub slot_rank: &'a Buffer,
+    pub unique: &'a Buffer,
+    pub counters: &'a Buffer,
+    pub counts: &'a Buffer,
+    pub offsets: &'a Buffer,
+    pub list: &'a Buffer,
+}
+
+/// Where the transparent fragments go (one per technique: the variants' sizes do not matter).
+#[allow(clippy::large_enum_variant)]
+enum Store {
+    /// Per-pixel linked lists: heads, nodes and the nodes they hold.
+    Lists { heads: Buffer, nodes: Buffer, capacity: u32 },
+    /// Weighted blended OIT's targets.
+    Weighted(Box<WeightedStore>),
+}
+
+/// Weighted blended OIT's targets (accumulation RGBA32F, revealage R32F) and their buffer copies.
+struct WeightedStore {
+    accum: Image,
+    revealage: Image,
+    accum_buf: Buffer,
+    revealage_buf: Buffer,
+}
+
+/// The transparent pass of one technique (module docs).
+pub struct Transparency {
+    variant: OitVariant,
+    keys: Option<GraphicsPipeline<TransparentParams>>,
+    shade: [GraphicsPipeline<TransparentParams>; 3],
+    resolve: ComputePipeline<OitParams>,
+    store: Store,
+    counters: Buffer,
+    /// Each transparent draw's first primitive id (its triangles numbered in draw order).
+    first_primitives: Vec<u32>,
+    last: TransparencyStats,
+}
+
+impl Transparency {
+    /// The pass for a frame whose scene has transparent draws (`None` otherwise: nothing is
+    /// allocated or created). `all_lights`: every fragment sums every light (the brute-force
+    /// reference) instead of its cluster's list.
+    pub fn new(f: &FrameInputs<'_>, ctx: &crate::vk::Context, all_lights: bool) -> Result<Option<Self>> {
+        let draws = &f.geometry.transparent;
+        if draws.is_empty() {
+            return Ok(None);
+        }
+        let weighted = f.settings.oit == OitVariant::Weighted;
+        let raster = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
+        let colours: &[(TargetFormat, Blend)] = if weighted { &WEIGHTED_TARGETS } else { &[] };
+        let pipe = |h: kernels::RasterKernel<TransparentParams>, colours| GraphicsPipeline::blended(ctx, &raster, h.fragment, h, colours, DepthTest::NearerReadOnly);
+        let keys = if all_lights { None } else { Some(pipe(kernels::TRANSPARENT_KEYS, &[])?) };
+        let s = if weighted { &kernels::TRANSPARENT_WEIGHTED } else { &kernels::TRANSPARENT_SHADE }[usize::from(all_lights)];
+        let shade = [pipe(s[0], colours)?, pipe(s[1], colours)?, pipe(s[2], colours)?];
+        let compute = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
+        let resolve = ComputePipeline::new(ctx, &compute, if weighted { kernels::OIT_RESOLVE_WEIGHTED } else { kernels::OIT_RESOLVE })?;
+        let (pixels, g) = (f.params.count as u64, &f.params.grid);
+        let store = if weighted {
+            let [(accum, _), (revealage, _)] = WEIGHTED_TARGETS;
+            crate::vk::memory::check_range(ctx, "oit accumulation", accum.bytes() * pixels)?;
+            Store::Weighted(Box::new(WeightedStore {
+                accum: Image::target(ctx, "oit accumulation", g.width, g.height, accum)?,
+                revealage: Image::target(ctx, "oit revealage", g.width, g.height, revealage)?,
+                accum_buf: Buffer::storage(ctx, "oit accumulation", accum.bytes() * pixels)?,
+                revealage_buf: Buffer::storage(ctx, "oit revealage", revealage.bytes() * pixels)?,
+            }))
+        } else {
+            crate::vk::memory::check_range(ctx, "oit heads", 4 * pixels)?;
+            // Two nodes per pixel, within one storage-buffer range (lavapipe: 128 MiB); more grows.
+            let fits = u32::try_from(ctx.info.max_storage_buffer_range as u64 / 16).unwrap_or(u32::MAX);
+            let capacity = f.params.count.saturating_mul(2).clamp(1024, fits.max(1024));
+            Store::Lists { heads: Buffer::filled(ctx, "oit heads", 4 * pixels, OIT_END)?, nodes: Self::node_buffer(ctx, capacity)?, capacity }
+        };
+        let mut first_primitives = Vec::with_capacity(draws.len());
+        let mut next = 0u32;
+        for d in draws {
+            first_primitives.push(next);
+            next = next.wrapping_add(d.index_count / 3);
+        }
+        Ok(Some(Self {
+            variant: f.settings.oit,
+            keys,
+            shade,
+            resolve,
+            store,
+            counters: Buffer::storage(ctx, "oit counters", 4 * OIT_COUNTERS as u64)?,
+            first_primitives,
+            last: TransparencyStats::default(),
+        }))
+    }
+
+    fn node_buffer(ctx: &crate::vk::Context, capacity: u32) -> VkResult<Buffer> {
+        let bytes = 16 * capacity as u64;
+        crate::vk::memory::check_range(ctx, "oit nodes", bytes)?;
+        Buffer::storage(ctx, "oit nodes", bytes)
+    }
+
+    /// Nodes the node buffer holds (0: weighted, no lists).
+    fn capacity(&self) -> u32 {
+        match self.store {
+            Store::Lists { capacity, .. } => capacity,
+            Store::Weighted(_) => 0,
+        }
+    }
+
+    fn push(&self, f: &FrameInputs<'_>, frame: &FrameParams, i: usize, stage: u32) -> TransparentParams {
+        let d = &f.geometry.transparent[i];
+        TransparentParams {
+            frame: *frame,
+            draw: TransparentDraw {
+                albedo: d.params.albedo,
+                material: d.params.material,
+                normal_precision: d.params.normal_precision,
+                first_primitive: self.first_primitives[i],
+                capacity: self.capacity(),
+                stage,
+            },
+        }
+    }
+
+    /// Draws every transparent draw over the opaque depth (in use `from`, left as a depth
+    /// target) into `colours` with `extra` storage buffers after the vertex stage's: the cluster
+    /// pre-pass at `keys` = `Some(stage)`, else the transparent pass of the draw's variant with
+    /// its textures.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, colours: &[Attachment<'_>], extra: &[&Buffer], keys: Option<u32>) -> VkResult<()> {
+        let depth = &f.targets.depth;
+        rec.transition(depth, from, ImageUse::DepthTarget);
+        rec.fragments_read_earlier_writes();
+        rec.begin_rendering(colours, Attachment { image: depth, load: Load::Keep }, &f.geometry.indices);
+        for (i, d) in f.geometry.transparent.iter().enumerate() {
+            let (pipe, textures) = match (&self.keys, keys) {
+                (Some(k), Some(_)) => (k, 0),
+                _ => (&self.shade[d.variant()], d.variant()),
+            };
+            let bindings = f.draw_bindings(extra, d, textures);
+            rec.draw_indexed(pipe, &bindings, &self.push(f, frame, i, keys.unwrap_or(0)), d.first_index, d.index_count)?;
+        }
+        rec.end_rendering();
+        rec.kernels_read_fragment_writes();
+        Ok(())
+    }
+
+    /// Step 1, `stage` `TRANSPARENT_MARK_PAGES` (after the key kernel, before the page scan) or
+    /// `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slot scan). The opaque depth is
+    /// in use `from` (the G-buffer leaves it a copy source).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_clusters(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, stage: u32, marks: &Buffer, page_base: &Buffer, slots: &Buffer) -> VkResult<()> {
+        self.draw_all(rec, f, frame, from, &[], &[f.bounds, marks, page_base, slots], Some(stage))
+    }
+
+    /// Steps 2 and 3, after the opaque shading: the transparent pass and the resolve into the
+    /// frame. `clusters`: the lists each fragment reads (`None` with `all_lights`).
+    pub fn record_shade(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, clusters: Option<&ClusterInputs<'_>>) -> VkResult<()> {
+        rec.pass("transparent", |rec| {
+            rec.fill(&self.counters, 0);
+            // The brute-force variant reads no cluster data: any buffer fills those bindings.
+            let any = &self.counters;
+            let c = clusters.map_or([any; 7], |c| [c.page_base, c.slot_rank, c.unique, c.counters, c.counts, c.offsets, c.list]);
+            let mut extra = vec![f.bounds, c[0], c[1], c[2], c[3], c[4], c[5], c[6], f.lights, f.materials];
+            match &self.store {
+                Store::Lists { heads, nodes, .. } => {
+                    extra.extend([heads, nodes, &self.counters]);
+                    self.draw_all(rec, f, frame, from, &[], &extra, None)
+                }
+                Store::Weighted(w) => {
+                    let WeightedStore { accum, revealage, accum_buf, revealage_buf } = &**w;
+                    extra.push(&self.counters);
+                    rec.transition(accum, ImageUse::Undefined, ImageUse::ColourTarget);
+                    rec.transition(revealage, ImageUse::Undefined, ImageUse::ColourTarget);
+                    let targets = [
+                        Attachment { image: accum, load: Load::ClearF32([0.0; 4]) },
+                        Attachment { image: revealage, load: Load::ClearF32([1.0; 4]) },
+                    ];
+                    self.draw_all(rec, f, frame, from, &targets, &extra, None)?;
+                    rec.transition(accum, ImageUse::ColourTarget, ImageUse::CopySource);
+                    rec.transition(revealage, ImageUse::ColourTarget, ImageUse::CopySource);
+                    rec.copy_to_buffers(&[(accum, accum_buf), (revealage, revealage_buf)]);
+                    Ok(())
+                }
+            }
+        })?;
+        rec.pass("oit resolve", |rec| {
+            let (variant, k) = self.variant.params();
+            let g = &frame.grid;
+            let p = OitParams { capacity: self.capacity(), width: g.width, height: g.height, variant, k, near: g.near, _pad: [0; 2] };
+            match &self.store {
+                Store::Lists { heads, nodes, .. } => rec.dispatch_linear(&self.resolve, &[heads, nodes, f.frame, &self.counters], &p, frame.count),
+                Store::Weighted(w) => rec.dispatch_linear(&self.resolve, &[&w.accum_buf, &w.revealage_buf, f.frame], &p, frame.count),
+            }
+        })
+    }
+
+    /// After a frame: reads the counters; grows the node buffer when the frame's fragments did
+    /// not fit (the frame then re-runs).
+    pub fn grow_if_needed(&mut self, ctx: &crate::vk::Context) -> Result<Option<String>> {
+        let c: Vec<u32> = self.counters.read(OIT_COUNTERS as usize)?;
+        self.last = TransparencyStats {
+            fragments: c[OIT_COUNTER_NODES as usize],
+            max_layers: c[OIT_COUNTER_MAX_LAYERS as usize],
+            fallbacks: c[OIT_COUNTER_FALLBACKS as usize],
+            unlisted: c[OIT_COUNTER_UNLISTED as usize],
+            node_bytes: match &self.store {
+                Store::Lists { nodes, .. } => nodes.size,
+                Store::Weighted(_) => 0,
+            },
+        };
+        let Store::Lists { nodes, capacity, .. } = &mut self.store else { return Ok(None) };
+        if !shaders::oit::overflowed(self.last.fragments, *capacity) {
+            return Ok(None);
+        }
+        let grown = grown_capacity(self.last.fragments);
+        *nodes = Self::node_buffer(ctx, grown).with_context(|| format!("growing the oit nodes to {grown} fragments"))?;
+        *capacity = grown;
+        Ok(Some(format!("oit nodes to {grown} fragments")))
+    }
+
+    pub fn stats(&self) -> TransparencyStats {
+        self.last
+    }
+
+    /// Bytes per buffer (weighted: each target with its buffer copy).
+    pub fn buffers(&self) -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> = match &self.store {
+            Store::Lists { heads, nodes, .. } => [heads, nodes].iter().map(|b| (b.name.clone(), b.size)).collect(),
+            Store::Weighted(w) => [&w.accum_buf, &w.revealage_buf].iter().map(|b| (b.name.clone(), 2 * b.size)).collect(),
+        };
+        v.push((self.counters.name.clone(), self.counters.size));
+        v
+    }
+}
