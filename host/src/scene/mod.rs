@@ -10,6 +10,9 @@
 //! override, the `glass` scene's panes); [`Scene::has_transparency`] says whether any mesh uses a
 //! transparent one. The renderer draws every surface opaque for now.
 //!
+//! Curved surfaces: [`nurbs`] models rational B-spline patches (validation, GPU packing, an exact
+//! sphere and torus, a bicubic teapot); no scene holds them yet.
+//!
 //! Conventions: right-handed, y up, counter-clockwise front faces seen from outside; units are
 //! whatever the geometry uses (the procedural scenes use metres, Sponza its original Crytek
 //! units, about 0.8 cm). Every error is one line naming the file and its line or key, or the item
@@ -25,6 +28,7 @@ pub mod description;
 pub mod flatten;
 pub mod gltf;
 pub mod lights;
+pub mod nurbs;
 pub mod obj;
 pub mod procedural;
 pub mod text;
