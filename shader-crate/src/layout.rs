@@ -566,3 +566,39 @@ pub struct TransparentParams {
 }
 const _: () = assert!(core::mem::size_of::<TransparentParams>() == 128);
 const _: () = assert!(core::mem::size_of::<TransparentParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
+// ─── NURBS surfaces ──────────────────────────────────────────────────────────────────────────
+
+/// One rational B-spline patch in the tessellation pass's storage buffers (`crate::nurbs`).
+///
+/// Knots are `f32` in one shared buffer: the u vector at `knot_offset_u` (`size_u + degree_u + 1`
+/// values), the v vector at `knot_offset_v` (`size_v + degree_v + 1`). Control points are
+/// homogeneous `[f32; 4]` **with premultiplied weights**, `(w·x, w·y, w·z, w)`, in one shared
+/// buffer: point `(i, j)` (i along u) at `cp_offset + j·size_u + i`. The tessellated grid has
+/// `(level + 1)²` vertices from `vertex_offset` and `6·level²` indices from `index_offset`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct NurbsPatchGpu {
+    /// Degree in u, 1..=`nurbs::MAX_DEGREE`.
+    pub degree_u: u32,
+    pub degree_v: u32,
+    /// Control points along u (`n + 1`), at least `degree_u + 1`.
+    pub size_u: u32,
+    pub size_v: u32,
+    /// Element index of the first u knot in the knot buffer.
+    pub knot_offset_u: u32,
+    pub knot_offset_v: u32,
+    /// Element index of control point (0, 0) in the control-point buffer.
+    pub cp_offset: u32,
+    /// Quads along each parameter direction (≥ 1).
+    pub level: u32,
+    /// First vertex of the patch in the vertex streams.
+    pub vertex_offset: u32,
+    /// First index of the patch in the index buffer.
+    pub index_offset: u32,
+    /// Material index of the patch's triangles.
+    pub material: u32,
+    pub _pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<NurbsPatchGpu>() == 48);

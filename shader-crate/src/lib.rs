@@ -18,6 +18,8 @@
 //! * [`raster`] — the G-buffer vertex/fragment shaders (graphics module).
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 //! * [`lighting`] — culling tests, falloff, BRDF, tonemapping and output encoding.
+//! * [`nurbs`] — rational B-spline surfaces: knot spans, basis functions and derivatives, rational
+//!   surface points and normals, the per-vertex / per-quad tessellation of a patch.
 //! * [`oit`] — order-independent transparency: per-pixel linked lists (list building, exact and
 //!   k-nearest resolves) and weighted blended OIT; the transparent pass's fragment shaders
 //!   ([`raster_transparent`], graphics module) and its resolve kernel ([`transparency`]).
@@ -99,6 +101,7 @@ pub mod light_bvh;
 pub mod light_lists;
 pub mod lighting;
 pub mod morton;
+pub mod nurbs;
 pub mod octahedral;
 pub mod oit;
 pub mod page_table;

@@ -11,6 +11,9 @@
 //! transparent one. The renderer draws those meshes in its transparent pass (`render::transparent`;
 //! the techniques without one refuse such scenes).
 //!
+//! Curved surfaces: [`nurbs`] models rational B-spline patches (validation, GPU packing, an exact
+//! sphere and torus, a bicubic teapot); no scene holds them yet.
+//!
 //! Conventions: right-handed, y up, counter-clockwise front faces seen from outside; units are
 //! whatever the geometry uses (the procedural scenes use metres, Sponza its original Crytek
 //! units, about 0.8 cm). Every error is one line naming the file and its line or key, or the item
@@ -26,6 +29,7 @@ pub mod description;
 pub mod flatten;
 pub mod gltf;
 pub mod lights;
+pub mod nurbs;
 pub mod obj;
 pub mod procedural;
 pub mod text;
