@@ -166,9 +166,20 @@ pub fn parse_techniques(s: &str) -> Result<Vec<Technique>> {
 ///   [`CLUSTER_PAIRS_GPU`] light–cluster pairs on a GPU (10M lights at 1080p is 8·10^10: 6 s per
 ///   frame for the naive assignment, measured 0.63 s at 1M on an H100), beyond
 ///   [`CLUSTER_PAIRS_CPU`] on a CPU driver.
-pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool) -> Option<String> {
+pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool, transparent: bool) -> Option<String> {
     let pairs = lights as u64 * pixels;
     let limit: u64 = if cpu_driver { 2_000_000_000 } else { 400_000_000_000 };
+    if transparent && t == Technique::Deferred {
+        // Brute force also shades every light for every transparent fragment, in a fragment
+        // shader: count TRANSPARENT_LAYERS layers per pixel at FRAGMENT_COST times the cost.
+        let fragment_pairs = pairs.saturating_mul(TRANSPARENT_LAYERS);
+        let fragment_limit = limit / FRAGMENT_COST;
+        if fragment_pairs > fragment_limit {
+            return Some(format!(
+                "brute force would shade about {fragment_pairs:.3e} light–fragment pairs of transparent surfaces per frame in a fragment shader (limit {fragment_limit:.0e}): minutes per run"
+            ));
+        }
+    }
     let cluster_pairs = lights as u64 * (pixels / PIXELS_PER_CLUSTER).max(1);
     let cluster_limit = if cpu_driver { CLUSTER_PAIRS_CPU } else { CLUSTER_PAIRS_GPU };
     match t {
@@ -181,6 +192,13 @@ pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool) -
         _ => None,
     }
 }
+
+/// Transparent layers per pixel [`skip_reason`] assumes for brute force in a transparent scene.
+pub const TRANSPARENT_LAYERS: u64 = 4;
+/// How much more a light costs in a fragment shader than in a compute kernel, for
+/// [`skip_reason`]: Forward+ on the H200 (`docs/results/h200/README.md`) shades the same lights
+/// about 50× slower in its fragment shader than the compute techniques do.
+pub const FRAGMENT_COST: u64 = 50;
 
 /// Pixels per cluster holding pixels, for [`skip_reason`]'s estimate (1080p Sponza and city: 6 700
 /// – 8 000 unique clusters for 2.07M pixels).
@@ -291,7 +309,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
         let warm = BenchArgs { frames: a.frames.max(10), ..a.clone() };
         let runnable: Vec<Technique> =
-            techniques.iter().copied().filter(|&t| skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver).is_none()).collect();
+            techniques.iter().copied().filter(|&t| skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver, scene.has_transparency()).is_none()).collect();
         let start = std::time::Instant::now();
         'warm: while !runnable.is_empty() && start.elapsed().as_secs_f64() < warm_up_seconds {
             for &t in &runnable {
@@ -307,7 +325,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
             for &t in &techniques {
                 bar.set_message(format!("{name} {t:?} {n} lights"));
                 let pixels = a.width as u64 * a.height as u64;
-                if let Some(why) = skip_reason(t, n, pixels, cpu_driver) {
+                if let Some(why) = skip_reason(t, n, pixels, cpu_driver, scene.has_transparency()) {
                     out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why });
                 } else {
                     match run_config(gpu, &scene, name, t, n, a) {
@@ -420,8 +438,12 @@ mod tests {
     #[test]
     fn skips_what_would_take_minutes_only() {
         let hd = 1920 * 1080;
-        let skipped = |t, n| skip_reason(t, n, hd, false).is_some();
+        let skipped = |t, n| skip_reason(t, n, hd, false, false).is_some();
         assert!(!skipped(Technique::Deferred, 100_000) && skipped(Technique::Deferred, 1_000_000));
+        // Transparent surfaces: brute force shades them per fragment, so it stops far earlier.
+        let transparent = |t, n| skip_reason(t, n, hd, false, true).is_some();
+        assert!(!transparent(Technique::Deferred, 500) && transparent(Technique::Deferred, 10_000));
+        assert!(!transparent(Technique::ClusteredBvh, 10_000_000));
         for t in [Technique::ClusteredNaive, Technique::ClusteredAabb] {
             assert!(!skipped(t, 1_000_000) && skipped(t, 10_000_000), "{t:?}");
         }
