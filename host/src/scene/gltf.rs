@@ -194,10 +194,9 @@ fn materials_of(doc: &gltf::Document, images: &[gltf::image::Data], path: &Path,
         if textures.iter().any(|t| t.path == name) {
             return Some(name);
         }
-        match images.get(image).map(|d| rgba8(d, kind)) {
-            Some(Ok(rgba8)) => {
-                let d = &images[image];
-                textures.push(Texture { path: name.clone(), kind, width: d.width, height: d.height, rgba8 });
+        match images.get(image).map(dynamic_image) {
+            Some(Ok(img)) => {
+                textures.push(super::obj::texture_of(name.clone(), img, kind));
                 Some(name)
             }
             Some(Err(e)) => {
@@ -232,27 +231,23 @@ fn materials_of(doc: &gltf::Document, images: &[gltf::image::Data], path: &Path,
     Ok((materials, textures))
 }
 
-/// RGBA8 texels of a decoded image: colour as stored, or the coverage (alpha, else luminance)
-/// in all four channels for a mask ([`TextureKind`]).
-fn rgba8(d: &gltf::image::Data, kind: TextureKind) -> Result<Vec<u8>> {
+/// The importer's decoded image as an `image` buffer (its bytes are the buffer's, native endian),
+/// for [`super::obj::texture_of`]; float images are not supported.
+fn dynamic_image(d: &gltf::image::Data) -> Result<image::DynamicImage> {
     use gltf::image::Format as F;
-    let px = &d.pixels;
-    let rgba: Vec<[u8; 4]> = match d.format {
-        F::R8 => px.iter().map(|&v| [v, v, v, 255]).collect(),
-        F::R8G8 => px.chunks_exact(2).map(|c| [c[0], c[0], c[0], c[1]]).collect(),
-        F::R8G8B8 => px.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect(),
-        F::R8G8B8A8 => px.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect(),
-        // 16-bit channels, little endian: the high byte.
-        F::R16 => px.chunks_exact(2).map(|c| [c[1], c[1], c[1], 255]).collect(),
-        F::R16G16 => px.chunks_exact(4).map(|c| [c[1], c[1], c[1], c[3]]).collect(),
-        F::R16G16B16 => px.chunks_exact(6).map(|c| [c[1], c[3], c[5], 255]).collect(),
-        F::R16G16B16A16 => px.chunks_exact(8).map(|c| [c[1], c[3], c[5], c[7]]).collect(),
+    use image::{DynamicImage as D, ImageBuffer};
+    let (w, h, px) = (d.width, d.height, d.pixels.clone());
+    let wide = || px.chunks_exact(2).map(|c| u16::from_ne_bytes([c[0], c[1]])).collect::<Vec<u16>>();
+    let img = match d.format {
+        F::R8 => ImageBuffer::from_raw(w, h, px).map(D::ImageLuma8),
+        F::R8G8 => ImageBuffer::from_raw(w, h, px).map(D::ImageLumaA8),
+        F::R8G8B8 => ImageBuffer::from_raw(w, h, px).map(D::ImageRgb8),
+        F::R8G8B8A8 => ImageBuffer::from_raw(w, h, px).map(D::ImageRgba8),
+        F::R16 => ImageBuffer::from_raw(w, h, wide()).map(D::ImageLuma16),
+        F::R16G16 => ImageBuffer::from_raw(w, h, wide()).map(D::ImageLumaA16),
+        F::R16G16B16 => ImageBuffer::from_raw(w, h, wide()).map(D::ImageRgb16),
+        F::R16G16B16A16 => ImageBuffer::from_raw(w, h, wide()).map(D::ImageRgba16),
         other => bail!("{other:?} texels are not supported"),
     };
-    let has_alpha = matches!(d.format, F::R8G8 | F::R8G8B8A8 | F::R16G16 | F::R16G16B16A16);
-    Ok(match kind {
-        TextureKind::Albedo => rgba.into_iter().flatten().collect(),
-        TextureKind::AlphaMask if has_alpha => rgba.into_iter().flat_map(|p| [p[3]; 4]).collect(),
-        TextureKind::AlphaMask => rgba.into_iter().flat_map(|p| [((p[0] as u32 * 54 + p[1] as u32 * 183 + p[2] as u32 * 19) / 256) as u8; 4]).collect(),
-    })
+    img.ok_or_else(|| anyhow!("{}×{} {:?} image with {} bytes", w, h, d.format, d.pixels.len()))
 }

@@ -85,6 +85,12 @@ pub fn load_texture(path: &Path, kind: TextureKind) -> Result<Texture> {
         .with_context(|| format!("cannot read {}", path.display()))?
         .decode()
         .with_context(|| format!("cannot decode {}", path.display()))?;
+    Ok(texture_of(path.to_owned(), img, kind))
+}
+
+/// A decoded image as a [`Texture`] of `kind`: colour as stored, or for a mask the coverage (its
+/// alpha, else its luminance) in every channel (see [`TextureKind`]).
+pub fn texture_of(path: PathBuf, img: image::DynamicImage, kind: TextureKind) -> Texture {
     let has_alpha = img.color().has_alpha();
     let (width, height) = (img.width(), img.height());
     let rgba8 = match kind {
@@ -92,7 +98,7 @@ pub fn load_texture(path: &Path, kind: TextureKind) -> Result<Texture> {
         TextureKind::AlphaMask if has_alpha => img.into_rgba8().pixels().flat_map(|p| [p.0[3]; 4]).collect(),
         TextureKind::AlphaMask => img.into_luma8().into_raw().into_iter().flat_map(|c| [c; 4]).collect(),
     };
-    Ok(Texture { path: path.to_owned(), kind, width, height, rgba8 })
+    Texture { path, kind, width, height, rgba8 }
 }
 
 /// Loads an OBJ file (and its MTL and textures, read with `mtl`) into a scene named after the
