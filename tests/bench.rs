@@ -147,14 +147,19 @@ fn tiny_accuracy_study() {
 /// pixel): exact OIT is the reference (error 0), k = 1 and weighted blending differ from it
 /// (the knob reaches the resolve), more sorted layers are never less accurate here, and the OIT
 /// Pareto plot is written. Scenes without transparency get no OIT rows (the city study above
-/// has 14 rows).
+/// has 14 rows). `--knobs` picks the knobs measured: here the OIT knob and the tile size only.
 #[test]
 fn accuracy_study_oit_knob() {
     let dir = TempDir::new("accuracy-oit");
     let out = dir.path().to_str().unwrap();
-    let run = manylights(["bench", "--study", "accuracy", "--lights", "300", "--scenes", "glass@stack", "--width", "96", "--height", "54", "--frames", "1", "--out", out]);
+    let run = manylights([
+        "bench", "--study", "accuracy", "--knobs", "oit,tile-size", "--lights", "300", "--scenes", "glass@stack", "--width", "96", "--height", "54", "--frames", "1", "--out", out,
+    ]);
     assert!(run.ok, "study failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("accuracy.csv"));
+    let mut knobs: Vec<String> = csv.rows().map(|r| r.get("knob").to_string()).collect();
+    knobs.dedup();
+    assert_eq!(knobs, ["tile size", "transparency (OIT)"], "the knobs asked for, and only those");
     let oit: Vec<_> = csv.rows().filter(|r| r.get("knob") == "transparency (OIT)").collect();
     let settings: Vec<&str> = oit.iter().map(|r| r.get("setting")).collect();
     assert_eq!(settings, ["exact", "k = 8", "k = 4", "k = 2", "k = 1", "weighted blended"]);
@@ -165,4 +170,26 @@ fn accuracy_study_oit_knob() {
     assert!(psnr("k = 8") >= psnr("k = 1"), "8 sorted layers are not less accurate than 1 here");
     assert!(oit.iter().all(|r| r.num("transparent_ms") > 0.0), "the transparent passes are timed");
     assert!(std::fs::read_to_string(dir.join("pareto-oit-glass-stack.svg")).expect("OIT pareto plot").starts_with("<svg"));
+}
+
+/// `bench` on a scene with transparent materials: every technique with a transparent pass is
+/// timed with it (its `transparent` and `oit resolve` rows), and the tiled techniques, which
+/// refuse such scenes, are reported as skipped with their refusal, not dropped.
+#[test]
+fn bench_times_the_transparent_pass() {
+    let dir = TempDir::new("bench-glass");
+    let out = dir.path().to_str().unwrap();
+    let run = manylights(["bench", "--lights", "200", "--scenes", "glass@stack", "--width", "64", "--height", "36", "--frames", "1", "--out", out]);
+    assert!(run.ok, "bench failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("results.csv"));
+    for &t in Technique::value_variants() {
+        let stages: BTreeSet<String> = csv.rows().filter(|r| r.get("technique") == technique_name(t)).map(|r| r.get("stage").to_string()).collect();
+        if t.draws_transparency() {
+            assert!(stages.contains("transparent") && stages.contains("oit resolve"), "{t:?}: stages {stages:?}");
+        } else {
+            assert!(stages.is_empty(), "{t:?} refuses the scene: {stages:?}");
+            let line = format!("skipped glass@stack {} 200 lights: ", technique_name(t));
+            assert!(run.stderr.lines().any(|l| l.starts_with(&line) && l.contains("no transparent pass")), "{t:?}: no skip line in\n{}", run.stderr);
+        }
+    }
 }

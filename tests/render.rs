@@ -7,6 +7,7 @@ use common::pixels::{lit, worst_channel};
 use common::render::{asset_scene, city, frame, render_error};
 use common::scenes::hard_light_cases;
 use host::gpu::Gpu;
+use host::render::forward_plus::TileLists;
 use host::render::sort::SortKind;
 use host::render::transparent::OitVariant;
 use host::render::{reference, Frame, Settings, Technique};
@@ -25,6 +26,25 @@ fn settings(w: u32, h: u32, technique: Technique) -> Settings {
 /// light lists); returns the naive clustered frame.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     assert_equal_to_reference_with(gpu, scene, lights, &settings(w, h, Technique::Deferred), what)
+}
+
+/// [`assert_equal_to_reference_with`] on a scene with transparent materials, plus the other
+/// techniques with a transparent pass — `clustered-aabb` and `forward-plus` with both list
+/// layouts — against the same reference (and every transparent fragment of `clustered-aabb`
+/// found its cluster's list). Returns the naive clustered frame.
+fn assert_transparent_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], base: &Settings, what: &str) -> Frame {
+    assert!(scene.has_transparency(), "{what}: a scene with transparent materials");
+    let naive = assert_equal_to_reference_with(gpu, scene, lights, base, what);
+    let reference = frame(gpu, scene, lights, &Settings { technique: Technique::Deferred, ..base.clone() });
+    for (technique, fp_lists) in [(Technique::ClusteredAabb, TileLists::Array), (Technique::ForwardPlus, TileLists::Linked), (Technique::ForwardPlus, TileLists::Array)] {
+        let f = frame(gpu, scene, lights, &Settings { technique, fp_lists, ..base.clone() });
+        let worst = worst_channel(&reference.pixels, &f.pixels);
+        assert!(worst <= 1, "{what}, {technique:?} ({fp_lists:?} lists): differs from deferred by {worst}/255");
+        let t = f.transparency.unwrap_or_else(|| panic!("{what}, {technique:?}: no transparent pass"));
+        assert_eq!((t.fragments, t.unlisted), (reference.transparency.unwrap().fragments, 0), "{what}, {technique:?}: {t:?}");
+    }
+    common::assert_clean(gpu);
+    naive
 }
 
 /// [`assert_equal_to_reference`] from settings `base` (its technique replaced by each run's).
@@ -64,10 +84,11 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     }
 }
 
-/// The glass scene through its stack (25 panes, 50 surfaces on the centre pixel): the clustered
-/// techniques with `--oit exact` equal the brute-force reference's transparent pass (every light
-/// per fragment, exact OIT) within 1/255, and every transparent fragment found its cluster's
-/// list (a fragment whose cluster the pre-pass did not mark is counted, and fails here).
+/// The glass scene through its stack (25 panes, 50 surfaces on the centre pixel): every technique
+/// with a transparent pass, with `--oit exact`, equals the brute-force reference's transparent
+/// pass (every light per fragment, exact OIT) within 1/255, and every transparent fragment found
+/// its cluster's list (a fragment whose cluster the pre-pass did not mark is counted, and fails
+/// here).
 #[test]
 fn glass_stack_equals_the_reference() {
     let gpu = common::gpu();
@@ -75,20 +96,20 @@ fn glass_stack_equals_the_reference() {
     assert!(scene.has_transparency());
     let l = lights::uniform(&scene, 300, 29).unwrap();
     let s = Settings { oit: OitVariant::Exact, ..settings(96, 54, Technique::Deferred) };
-    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "glass@stack");
+    let f = assert_transparent_equal_to_reference(&gpu, &scene, &l, &s, "glass@stack");
     assert!(lit(&f.pixels) * 4 > f.pixels.len(), "glass@stack: the frame should be mostly lit");
     assert_transparent_fragments_listed(&f, "glass@stack");
 }
 
-/// Weighted blended OIT (`--oit weighted`, no lists): the clustered techniques equal the
-/// reference's weighted pass within 1/255 on the glass stack, and every fragment found its list.
+/// Weighted blended OIT (`--oit weighted`, no lists): every technique with a transparent pass
+/// equals the reference's weighted pass within 1/255 on the glass stack, and every fragment found its list.
 #[test]
 fn weighted_oit_equals_the_reference() {
     let gpu = common::gpu();
     let scene = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
     let l = lights::uniform(&scene, 300, 29).unwrap();
     let s = Settings { oit: OitVariant::Weighted, ..settings(96, 54, Technique::Deferred) };
-    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "glass@stack, weighted");
+    let f = assert_transparent_equal_to_reference(&gpu, &scene, &l, &s, "glass@stack, weighted");
     let t = f.transparency.unwrap();
     assert!(t.fragments > 0 && t.unlisted == 0 && t.node_bytes == 0, "weighted: {t:?}");
 }
@@ -114,7 +135,7 @@ fn sponza_curtains_equal_the_reference_when_present() {
     assert!(scene.has_transparency());
     let l = lights::uniform(&scene, 300, 5).unwrap();
     let s = Settings { oit: OitVariant::Exact, ..settings(96, 54, Technique::Deferred) };
-    let f = assert_equal_to_reference_with(&gpu, &scene, &l, &s, "sponza-curtains");
+    let f = assert_transparent_equal_to_reference(&gpu, &scene, &l, &s, "sponza-curtains");
     assert_transparent_fragments_listed(&f, "sponza-curtains");
 }
 
@@ -160,6 +181,60 @@ fn shop_windows_only(mut scene: Scene) -> Scene {
         m.indices = m.indices.chunks(3).filter(|t| window(t)).flatten().copied().collect();
     }
     scene
+}
+
+/// The heatmap view with transparent surfaces: each transparent fragment shows its own list's
+/// length, composited like its shaded colour.
+/// 1. Lights whose spheres hold the whole scene: every list of every technique holds all of them,
+///    so every layer's colour is the ramp's colour of that count (below the ramp's top), and so is
+///    their composite on every pixel with opaque geometry behind the glass (a fragment shown with
+///    a shorter list, or none, would tint the pixel).
+/// 2. Lights of the usual size: each technique's heatmap changes where the glass covers the frame
+///    (pixels whose shaded colour the glass changes), and the clustered ones — lists per cluster:
+///    the glass adds clusters and changes none — keep every pixel it does not cover.
+#[test]
+fn heatmap_shows_the_transparent_fragments_lists() {
+    use shaders::layout::View;
+    let gpu = common::gpu();
+    let glass = Scene::load("glass@stack", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let mut bare = glass.clone();
+    let transparent: Vec<bool> = bare.materials.iter().map(|m| m.is_transparent()).collect();
+    for m in bare.meshes.iter_mut().filter(|m| transparent[m.material as usize]) {
+        m.indices.clear();
+    }
+    let techniques = [Technique::Deferred, Technique::ClusteredNaive, Technique::ClusteredBvh, Technique::ClusteredAabb, Technique::ForwardPlus];
+    let s = |technique, view| Settings { technique, view, oit: OitVariant::Exact, ..settings(64, 36, Technique::Deferred) };
+    // 1.
+    let mut huge = lights::uniform(&glass, 40, 3).unwrap();
+    for l in &mut huge {
+        l.radius = 1.0e5;
+    }
+    let all = shaders::lighting::encode_srgb8(shaders::lighting::heat_ramp(huge.len() as u32, host::render::HEAT_MAX));
+    for technique in techniques {
+        let heat = frame(&gpu, &glass, &huge, &s(technique, View::Heatmap));
+        assert!(heat.transparency.unwrap().max_layers > 8, "{technique:?}: the stack's layers");
+        let depth = &heat.readback.as_ref().unwrap().depth;
+        let geometry: Vec<usize> = (0..depth.len()).filter(|&i| !shaders::reconstruct::is_background(f32::from_bits(depth[i]))).collect();
+        assert!(geometry.len() * 2 > depth.len(), "{technique:?}: mostly geometry");
+        let worst = geometry.iter().map(|&i| worst_channel(&[heat.pixels[i]], &[all])).max().unwrap();
+        assert!(worst <= 1, "{technique:?}: a pixel's heat differs from {all:08x} (every light in every list) by {worst}/255");
+    }
+    // 2.
+    let l = lights::uniform(&glass, 200, 3).unwrap();
+    let shaded = frame(&gpu, &glass, &l, &s(Technique::Deferred, View::Shaded));
+    let covered: Vec<bool> = shaded.pixels.iter().zip(&frame(&gpu, &bare, &l, &s(Technique::Deferred, View::Shaded)).pixels).map(|(a, b)| a != b).collect();
+    assert!(covered.iter().filter(|&&c| c).count() * 4 > covered.len(), "glass@stack: the glass covers much of the frame");
+    for technique in techniques {
+        let with = frame(&gpu, &glass, &l, &s(technique, View::Heatmap));
+        let without = frame(&gpu, &bare, &l, &s(technique, View::Heatmap));
+        let changed: Vec<bool> = with.pixels.iter().zip(&without.pixels).map(|(a, b)| a != b).collect();
+        assert!(changed.iter().zip(&covered).any(|(&c, &cov)| c && cov), "{technique:?}: the glass's lists do not show");
+        if technique != Technique::ForwardPlus {
+            let stray = changed.iter().zip(&covered).filter(|(&c, &cov)| c && !cov).count();
+            assert_eq!(stray, 0, "{technique:?}: heatmap pixels the glass does not cover changed");
+        }
+    }
+    common::assert_clean(&gpu);
 }
 
 /// Only what the scene calls for: a scene without transparent materials records no transparent

@@ -32,12 +32,13 @@
 //! reference. 1920×1080 with 32 px tiles (276 slices): C = 563 040 → 25.9 MB of grid data.
 //! Workgroup memory: [`AABB_SHARED_WORDS`] words (8 KiB).
 use crate::cluster_bounds::cluster_aabb;
+pub use crate::dense_grid::{cluster_count, dense_coords, dense_index, pixel_cluster, NO_CLUSTER};
 use crate::coop::gpu::GpuCoop;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::light_lists::{subgroup_reserve, AtomicAdd, ListSink};
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
-use crate::{lighting, reconstruct};
+use crate::lighting;
 use glam::Vec3;
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -53,41 +54,9 @@ pub const AABB_SHARED_WORDS: usize = (LIGHT_BATCH * LIGHT_WORDS) as usize;
 const _: () = assert!(AABB_SHARED_WORDS * 4 <= 32 * 1024, "lavapipe has 32 KiB of workgroup memory");
 const _: () = assert!(LIGHT_BATCH.is_multiple_of(16));
 
-/// Pixel cluster index of a background pixel.
-pub const NO_CLUSTER: u32 = u32::MAX;
-
 /// Slots of the counters buffer.
 pub const AABB_COUNTER_ACTIVE: u32 = 0;
 pub const AABB_COUNTER_REFS: u32 = 1;
-
-/// Clusters of the full grid.
-#[inline]
-pub fn cluster_count(g: &ClusterGrid) -> u32 {
-    g.tiles_x * g.tiles_y * g.num_slices
-}
-
-/// Dense index of cluster `(i, j, k)`: `(k·tiles_y + j)·tiles_x + i`.
-#[inline]
-pub fn dense_index(g: &ClusterGrid, i: u32, j: u32, k: u32) -> u32 {
-    (k * g.tiles_y + j) * g.tiles_x + i
-}
-
-/// Inverse of [`dense_index`].
-#[inline]
-pub fn dense_coords(g: &ClusterGrid, c: u32) -> (u32, u32, u32) {
-    (c % g.tiles_x, (c / g.tiles_x) % g.tiles_y, c / (g.tiles_x * g.tiles_y))
-}
-
-/// Dense cluster of pixel `(px, py)` with depth-buffer value `z_buf`, or [`NO_CLUSTER`] for
-/// background: its tile and the exact slice of its distance.
-#[inline]
-pub fn pixel_cluster(g: &ClusterGrid, bounds: &[f32], px: u32, py: u32, z_buf: f32) -> u32 {
-    if reconstruct::is_background(z_buf) {
-        return NO_CLUSTER;
-    }
-    let (i, j) = g.tile_of_pixel(px, py);
-    dense_index(g, i, j, g.slice_of_depth(bounds, reconstruct::distance_from_depth(g.near, z_buf)))
-}
 
 #[inline]
 fn stage_light<S: SharedU32 + ?Sized>(s: &mut S, slot: u32, l: &PointLight) {

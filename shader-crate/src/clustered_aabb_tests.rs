@@ -4,7 +4,7 @@ use super::*;
 use crate::cluster_key::slice_bounds;
 use crate::coop::cpu::{run_workgroups, Emulation};
 use crate::lighting::light_touches;
-use crate::reconstruct::view_position;
+use crate::reconstruct::{self, view_position};
 use crate::test_support::{Counting, Rng};
 use std::sync::atomic::{AtomicU32, Ordering};
 

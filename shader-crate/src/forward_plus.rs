@@ -63,12 +63,10 @@ use crate::coop::gpu::GpuCoop;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::light_lists::{subgroup_reserve, AtomicAdd, AtomicExchange, ListSink};
-use crate::tile_cull::{tile_bounds, CULL_BATCH, LIGHTS_PER_INVOCATION, TILED_WORKGROUP, TILE_CULL_SHARED_WORDS};
+use crate::tile_cull::{tile_bounds, tile_widening, CULL_BATCH, NO_WIDENING, LIGHTS_PER_INVOCATION, TILED_WORKGROUP, TILE_CULL_SHARED_WORDS};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
-/// Counter slot of the light-reference allocator: nodes (linked) or index slots (array).
-pub const FP_COUNTER_REFS: u32 = 0;
 /// Most lights of a forward+ frame on llvmpipe.
 pub const MAX_LIGHTS_LLVMPIPE: u32 = 65_535;
 
@@ -110,9 +108,10 @@ pub fn cull_tile<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, H: Atomi
     head: &mut H,
     nodes: &mut L,
     capacity: u32,
+    widen: (u32, u32),
 ) -> u32 {
     let li = c.local_index();
-    let (_, cull) = tile_bounds(c, s, &p.frame.grid, tx, ty, p.mode, depth);
+    let (_, cull) = tile_bounds(c, s, &p.frame.grid, tx, ty, p.mode, depth, widen);
     let n = p.frame.num_lights;
     let mut pushed = 0;
     let mut next = if cull.empty { n } else { 0 };
@@ -133,29 +132,66 @@ pub fn cull_tile<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, H: Atomi
     pushed
 }
 
-/// Step 2 of the linked variant: one workgroup of 256 per tile, `(wg.x, wg.y)` = tile;
-/// `p.frame.light_capacity` = node capacity.
-#[spirv(compute(threads(256)))]
-#[allow(clippy::too_many_arguments)]
-pub fn forward_plus_cull(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(local_invocation_index)] local_index: u32,
-    #[spirv(subgroup_size)] subgroup_size: u32,
-    #[spirv(subgroup_local_invocation_id)] lane: u32,
-    #[spirv(subgroup_id)] subgroup_id: u32,
-    #[spirv(num_subgroups)] num_subgroups: u32,
-    #[spirv(push_constant)] p: &TiledParams,
-    #[spirv(workgroup)] shared: &mut [u32; TILE_CULL_SHARED_WORDS as usize],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] counters: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] heads: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] nodes: &mut [u32],
-) {
-    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let tile = (wg.y * p.frame.grid.tiles_x + wg.x) as usize;
-    cull_tile(&c, shared, p, wg.x, wg.y, depth, lights, &mut counters[FP_COUNTER_REFS as usize], &mut heads[tile], nodes, p.frame.light_capacity);
+/// Declares a culling entry (one workgroup of 256 per tile, `(wg.x, wg.y)` = tile) over
+/// `$cull`'s bindings 0–4, and its `_widened` twin: binding 5 holds the transparent fragments'
+/// depth range per tile (`TILE_DEPTH_WORDS`), which the tile's bounds then span (scenes with
+/// transparent draws; the plain entry reads no such buffer).
+macro_rules! cull_entries {
+    ($plain:ident, $widened:ident, $shared:expr, |$c:ident, $shared_arg:ident, $p:ident, $wg:ident, $local:ident, $depth:ident, $lights:ident, $counters:ident, $tiles:ident, $entries:ident, $widen:ident| $body:block) => {
+        #[doc = concat!("Step 2: [`", stringify!($plain), "`]'s culling, bounds from the opaque depth only.")]
+        #[spirv(compute(threads(256)))]
+        #[allow(clippy::too_many_arguments)]
+        pub fn $plain(
+            #[spirv(workgroup_id)] $wg: UVec3,
+            #[spirv(local_invocation_index)] $local: u32,
+            #[spirv(subgroup_size)] subgroup_size: u32,
+            #[spirv(subgroup_local_invocation_id)] lane: u32,
+            #[spirv(subgroup_id)] subgroup_id: u32,
+            #[spirv(num_subgroups)] num_subgroups: u32,
+            #[spirv(push_constant)] $p: &TiledParams,
+            #[spirv(workgroup)] $shared_arg: &mut [u32; $shared],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] $depth: &[f32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] $lights: &[PointLight],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] $counters: &mut [u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] $tiles: &mut [u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] $entries: &mut [u32],
+        ) {
+            let $c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index: $local };
+            let $widen = NO_WIDENING;
+            $body
+        }
+
+        #[doc = concat!("Step 2: [`", stringify!($plain), "`]'s culling, bounds widened to the tile's transparent fragments.")]
+        #[spirv(compute(threads(256)))]
+        #[allow(clippy::too_many_arguments)]
+        pub fn $widened(
+            #[spirv(workgroup_id)] $wg: UVec3,
+            #[spirv(local_invocation_index)] $local: u32,
+            #[spirv(subgroup_size)] subgroup_size: u32,
+            #[spirv(subgroup_local_invocation_id)] lane: u32,
+            #[spirv(subgroup_id)] subgroup_id: u32,
+            #[spirv(num_subgroups)] num_subgroups: u32,
+            #[spirv(push_constant)] $p: &TiledParams,
+            #[spirv(workgroup)] $shared_arg: &mut [u32; $shared],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] $depth: &[f32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] $lights: &[PointLight],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] $counters: &mut [u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] $tiles: &mut [u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] $entries: &mut [u32],
+            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] tile_depths: &[u32],
+        ) {
+            let $c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index: $local };
+            let $widen = tile_widening(tile_depths, $wg.y * $p.frame.grid.tiles_x + $wg.x);
+            $body
+        }
+    };
 }
+
+cull_entries!(forward_plus_cull, forward_plus_cull_widened, TILE_CULL_SHARED_WORDS as usize, |c, shared, p, wg, local_index, depth, lights, counters, heads, nodes, widen| {
+    // Step 2 of the linked variant; `p.frame.light_capacity` = node capacity.
+    let tile = (wg.y * p.frame.grid.tiles_x + wg.x) as usize;
+    cull_tile(&c, shared, p, wg.x, wg.y, depth, lights, &mut counters[FP_COUNTER_REFS as usize], &mut heads[tile], nodes, p.frame.light_capacity, widen);
+});
 
 /// A tile's list in the array variant: entries `offset..offset + count` of the index buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,9 +240,10 @@ pub fn cull_tile_array<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, L:
     counter: &mut A,
     indices: &mut L,
     capacity: u32,
+    widen: (u32, u32),
 ) -> TileRange {
     let li = c.local_index();
-    let (_, cull) = tile_bounds(c, s, &p.frame.grid, tx, ty, p.mode, depth);
+    let (_, cull) = tile_bounds(c, s, &p.frame.grid, tx, ty, p.mode, depth, widen);
     let n = p.frame.num_lights;
     // Workgroup-uniform state: survivors counted (first pass), staged, the first batch not
     // staged (`n`: none), whether the range is reserved (second pass), entries written.
@@ -247,33 +284,16 @@ pub fn cull_tile_array<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, L:
     TileRange { offset: base, count }
 }
 
-/// Step 2 of the array variant: one workgroup of 256 per tile, `(wg.x, wg.y)` = tile; writes the
-/// tile's `(offset, count)` at `ranges[2·tile]`; `p.frame.light_capacity` = index capacity.
-#[spirv(compute(threads(256)))]
-#[allow(clippy::too_many_arguments)]
-pub fn forward_plus_cull_array(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(local_invocation_index)] local_index: u32,
-    #[spirv(subgroup_size)] subgroup_size: u32,
-    #[spirv(subgroup_local_invocation_id)] lane: u32,
-    #[spirv(subgroup_id)] subgroup_id: u32,
-    #[spirv(num_subgroups)] num_subgroups: u32,
-    #[spirv(push_constant)] p: &TiledParams,
-    #[spirv(workgroup)] shared: &mut [u32; FP_ARRAY_SHARED_WORDS],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] lights: &[PointLight],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] counters: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] ranges: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] indices: &mut [u32],
-) {
-    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let r = cull_tile_array(&c, shared, p, wg.x, wg.y, depth, lights, &mut counters[FP_COUNTER_REFS as usize], indices, p.frame.light_capacity);
+cull_entries!(forward_plus_cull_array, forward_plus_cull_array_widened, FP_ARRAY_SHARED_WORDS, |c, shared, p, wg, local_index, depth, lights, counters, ranges, indices, widen| {
+    // Step 2 of the array variant: writes the tile's `(offset, count)` at `ranges[2·tile]`;
+    // `p.frame.light_capacity` = index capacity.
+    let r = cull_tile_array(&c, shared, p, wg.x, wg.y, depth, lights, &mut counters[FP_COUNTER_REFS as usize], indices, p.frame.light_capacity, widen);
     if local_index == 0 {
         let tile = 2 * (wg.y * p.frame.grid.tiles_x + wg.x) as usize;
         ranges[tile] = r.offset;
         ranges[tile + 1] = r.count;
     }
-}
+});
 
 #[cfg(test)]
 #[path = "forward_plus_tests.rs"]

@@ -124,6 +124,12 @@ pub const FORWARD_PLUS_CULL: [Kernel<TiledParams>; 2] = [
     Kernel::new("forward_plus::forward_plus_cull", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
     Kernel::new("forward_plus::forward_plus_cull_array", 5, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
 ];
+/// [`FORWARD_PLUS_CULL`] with each tile's bounds widened to its transparent fragments (binding 5:
+/// their depth ranges; scenes with transparent draws).
+pub const FORWARD_PLUS_CULL_WIDENED: [Kernel<TiledParams>; 2] = [
+    Kernel::new("forward_plus::forward_plus_cull_widened", 6, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
+    Kernel::new("forward_plus::forward_plus_cull_array_widened", 6, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true),
+];
 
 // Bitonic-warp merge sort (`entries.rs`, `bitonic.rs`): the block sort gives each workgroup a
 // block, the merge each subgroup a piece (both cooperative); the splitters are one invocation
@@ -180,6 +186,8 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_AABB_SPECULAR.erased(),
     FORWARD_PLUS_CULL[0].erased(),
     FORWARD_PLUS_CULL[1].erased(),
+    FORWARD_PLUS_CULL_WIDENED[0].erased(),
+    FORWARD_PLUS_CULL_WIDENED[1].erased(),
     BITONIC_BLOCK_SORT.erased(),
     BITONIC_SPLITTERS.erased(),
     BITONIC_MERGE.erased(),
@@ -255,12 +263,13 @@ pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
     ],
 ];
 
-/// Cluster pre-pass of the transparent draws (`raster_transparent`): bounds, marks, page table,
-/// slots.
+/// Cluster pre-pass of the transparent draws (`raster_transparent`): bounds, marks (page marks,
+/// dense-grid flags or tile depth ranges), page table, slots.
 pub const TRANSPARENT_KEYS: RasterKernel<TransparentParams> = RasterKernel::new("raster_forward::depth_vs", "raster_transparent::transparent_keys_fs", 4, 0);
 /// Storage buffers of the transparent pass's fragment stage (`raster_transparent`): bounds, page
 /// table, slot ranks, unique clusters, cluster counters, counts, offsets, list, lights,
-/// materials, heads, nodes, OIT counters.
+/// materials, heads, nodes, OIT counters (the techniques without a page table bind their own
+/// lists in some of these: `raster_transparent::fragment_list`).
 pub const TRANSPARENT_FRAGMENT_BUFFERS: u32 = 13;
 /// The transparent pass `[over the cluster lists, over every light][plain, textured, alpha-tested]`
 /// (variants and vertex shaders as [`GBUFFER`]).

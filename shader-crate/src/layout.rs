@@ -529,11 +529,29 @@ pub const OIT_COUNTER_FALLBACKS: u32 = 2;
 pub const OIT_COUNTER_UNLISTED: u32 = 3;
 pub const OIT_COUNTERS: u32 = 4;
 
-/// `TransparentDraw::stage` of the cluster pre-pass (`raster_transparent::transparent_keys_fs`):
-/// mark the pages of the fragments' clusters (before the page scan) …
+/// `TransparentDraw::lists`: which light lists the technique keeps, so how a transparent fragment
+/// finds its list and what the cluster pre-pass (`raster_transparent::transparent_keys_fs`)
+/// marks. The page table (`clustered-naive`, `clustered-bvh`; lookup key → page → slot →
+/// cluster) is marked in two steps: the pages of the fragments' clusters (before the page
+/// scan) …
 pub const TRANSPARENT_MARK_PAGES: u32 = 0;
-/// … then set their slots (after the pages are allocated).
+/// … then their slots (after the pages are allocated).
 pub const TRANSPARENT_STORE_SLOTS: u32 = 1;
+/// The dense grid (`clustered-aabb`): the pre-pass flags each fragment's dense cluster beside
+/// the opaque pixels' flags; the lookup reads that cluster's `(offset, count)`.
+pub const TRANSPARENT_DENSE_GRID: u32 = 2;
+/// Per-tile arrays (`forward-plus --fp-lists array`): the pre-pass widens its tile's depth range
+/// to the fragment (`TILE_DEPTH_WORDS` per tile); the lookup reads the tile's `(offset, count)`.
+pub const TRANSPARENT_TILE_ARRAYS: u32 = 3;
+/// Per-tile linked lists (`forward-plus --fp-lists linked`): as the arrays, walking the tile's list.
+pub const TRANSPARENT_TILE_LINKED: u32 = 4;
+/// Words per tile of the transparent fragments' depth range (Forward+): `!min` and `max` of their
+/// view distances' bits, both kept by atomic max from 0 (bits of positive floats order like the
+/// floats, and `!` turns the minimum into a maximum, so one fill of 0 empties both).
+pub const TILE_DEPTH_WORDS: u32 = 2;
+
+/// Slot of the Forward+ counters buffer that allocates light references (nodes or indices).
+pub const FP_COUNTER_REFS: u32 = 0;
 
 /// Per-draw push constants of the transparent passes.
 #[repr(C)]
@@ -551,8 +569,9 @@ pub struct TransparentDraw {
     pub first_primitive: u32,
     /// Nodes the node buffer holds (`OitParams::capacity`).
     pub capacity: u32,
-    /// Cluster pre-pass: `TRANSPARENT_MARK_PAGES` or `TRANSPARENT_STORE_SLOTS`.
-    pub stage: u32,
+    /// `TRANSPARENT_MARK_PAGES` … `TRANSPARENT_TILE_LINKED`: the technique's light lists (and
+    /// the page table's pre-pass step).
+    pub lists: u32,
 }
 const _: () = assert!(core::mem::size_of::<TransparentDraw>() == 32);
 

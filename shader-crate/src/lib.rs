@@ -90,6 +90,7 @@ pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]
 pub mod deferred;
+pub mod dense_grid;
 #[cfg(feature = "compute")]
 pub mod entries;
 #[cfg(feature = "compute")]

@@ -110,7 +110,7 @@ pub fn forward_colour<const ARRAY: bool>(
     let f = &p.frame;
     let g = &f.grid;
     // An overflowed frame is re-run with a larger buffer: draw nothing from a partial list.
-    if counters[0] > f.light_capacity {
+    if counters[FP_COUNTER_REFS as usize] > f.light_capacity {
         return BACKGROUND_RGBA8;
     }
     let (px, py) = (frag.x as u32, frag.y as u32);

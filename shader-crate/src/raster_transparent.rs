@@ -5,16 +5,23 @@
 //! # Steps (a frame with transparent draws; the host's `render/transparent.rs` records them)
 //!
 //! 1. **G-buffer** of the opaque draws only (materials of opacity 1), then the opaque chain.
-//! 2. **Cluster pre-pass** ([`transparent_keys_fs`], clustered techniques): the transparent draws
-//!    rasterised twice against the opaque depth (test GREATER, no depth writes, early fragment
-//!    tests), each fragment computing its cluster key with the opaque key kernel's function
-//!    ([`page_table::pixel_key`], from its own depth): first it marks its key's page (beside the
-//!    key kernel's marks, before the page scan), then — after the pages are allocated — it sets its
-//!    key's slot (beside `store_slots`, before the slot scan and compaction). Its cluster is then
-//!    a unique cluster like any opaque pixel's and gets a light list from the same assignment.
+//! 2. **Cluster pre-pass** ([`transparent_keys_fs`], [`mark_cluster`]): the transparent draws
+//!    rasterised against the opaque depth (test GREATER, no depth writes, early fragment tests);
+//!    each fragment marks what the technique's lists (`TransparentDraw::lists`) are built from:
+//!    * page table (`clustered-naive`, `clustered-bvh`), two passes: the cluster key of the
+//!      opaque key kernel's function ([`page_table::pixel_key`], from its own depth) marks its
+//!      page (beside the key kernel's marks, before the page scan), then — after the pages are
+//!      allocated — sets its slot (beside `store_slots`, before the slot scan and compaction);
+//!    * dense grid (`clustered-aabb`): its dense cluster's flag, beside `aabb_mark`'s;
+//!    * tiles (`forward-plus`): its tile's transparent depth range, which the culling's tile
+//!      bounds then span.
+//!
+//!    Its cluster is then a cluster like any opaque pixel's and gets a list from the same
+//!    assignment; its tile's list holds the lights of its depth.
 //! 3. **Opaque shading** as usual.
 //! 4. **Transparent pass** ([`transparent_fs`] …): the same draws, same test; each fragment finds
-//!    its cluster (key → page → slot → cluster, the opaque shading's lookup), sums that cluster's
+//!    its list ([`fragment_list`]: key → page → slot → cluster, the dense cluster, or the tile:
+//!    the opaque shading's lookup), sums that list's
 //!    lights with the opaque surfaces' light loop ([`shading::shade_lights`]; the `_all_lights`
 //!    variants of the brute-force reference sum every light), tonemaps, and inserts a node into
 //!    its pixel's list ([`oit::insert_node`]: atomic counter, head exchange). The tie key is the
@@ -50,6 +57,7 @@ use crate::layout::*;
 use crate::octahedral::{self, Precision};
 use crate::oit;
 use crate::page_table::{self, INVALID_KEY};
+use crate::dense_grid;
 use crate::raster::{encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
 use crate::shading::{self, variant_entries, LightList, Surface};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
@@ -84,25 +92,67 @@ fn atomic_exchange(word: &mut u32, v: u32) -> u32 {
     }
 }
 
-/// Step 2 for one fragment (`frag`: its pixel and reversed-Z depth): mark its key's page
-/// (`TRANSPARENT_MARK_PAGES`) or set its key's slot (`TRANSPARENT_STORE_SLOTS`), as `pixel_keys`
-/// and `store_slots` do for an opaque pixel (a load first: a cluster's fragments share the word).
+/// Atomic max on a storage-buffer word (as [`atomic_add`]).
+#[inline]
+fn atomic_max(word: &mut u32, v: u32) {
+    #[cfg(target_arch = "spirv")]
+    unsafe {
+        spirv_std::arch::atomic_u_max::<u32, { spirv_std::memory::Scope::QueueFamily as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v);
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        *word = (*word).max(v);
+    }
+}
+
+/// Sets a mark word shared by many fragments (a load first: most find it set already).
+#[inline]
+fn set_mark(word: &mut u32) {
+    if *word == 0 {
+        *word = 1;
+    }
+}
+
+/// Step 2 for one fragment (`frag`: its pixel and reversed-Z depth), by the technique's lists
+/// (`p.draw.lists`): the page table's page (`TRANSPARENT_MARK_PAGES`) or slot
+/// (`TRANSPARENT_STORE_SLOTS`) of its key, as `pixel_keys` and `store_slots` do for an opaque
+/// pixel; the dense grid's flag of its cluster (`TRANSPARENT_DENSE_GRID`, beside `aabb_mark`'s);
+/// or its tile's transparent depth range (`TRANSPARENT_TILE_*`, `TILE_DEPTH_WORDS` in `marks`).
 #[inline]
 pub fn mark_cluster(p: &TransparentParams, bounds: &[f32], marks: &mut [u32], page_base: &[u32], slots: &mut [u32], frag: Vec4) {
-    let key = page_table::pixel_key(&p.frame.grid, bounds, frag.x as u32, frag.y as u32, frag.z);
+    let g = &p.frame.grid;
+    let (px, py) = (frag.x as u32, frag.y as u32);
+    let lists = p.draw.lists;
+    if lists == TRANSPARENT_DENSE_GRID {
+        let c = dense_grid::pixel_cluster(g, bounds, px, py, frag.z);
+        if c != dense_grid::NO_CLUSTER {
+            set_mark(&mut marks[c as usize]);
+        }
+        return;
+    }
+    if lists == TRANSPARENT_TILE_ARRAYS || lists == TRANSPARENT_TILE_LINKED {
+        let (tx, ty) = g.tile_of_pixel(px, py);
+        let w = (TILE_DEPTH_WORDS * (ty * g.tiles_x + tx)) as usize;
+        // A load first: the words only grow, so a fragment inside the range already marked
+        // (most of a tile's) needs no atomic.
+        let d = crate::reconstruct::distance_from_depth(g.near, frag.z).to_bits();
+        if marks[w] < !d {
+            atomic_max(&mut marks[w], !d);
+        }
+        if marks[w + 1] < d {
+            atomic_max(&mut marks[w + 1], d);
+        }
+        return;
+    }
+    let key = page_table::pixel_key(g, bounds, px, py, frag.z);
     if key == INVALID_KEY {
         return;
     }
     let page = page_table::page_of(key) as usize;
-    if p.draw.stage == TRANSPARENT_MARK_PAGES {
-        if marks[page] == 0 {
-            marks[page] = 1;
-        }
+    if lists == TRANSPARENT_MARK_PAGES {
+        set_mark(&mut marks[page]);
     } else {
-        let slot = page_table::slot_index(page_base[page], key) as usize;
-        if slots[slot] == 0 {
-            slots[slot] = 1;
-        }
+        set_mark(&mut slots[page_table::slot_index(page_base[page], key) as usize]);
     }
 }
 
@@ -220,8 +270,78 @@ pub fn weighted_transparent_fragment<const ALL_LIGHTS: bool>(
     oit::weighted_fragment(rgb, alpha, crate::reconstruct::distance_from_depth(p.frame.grid.near, frag.z))
 }
 
-/// The tonemapped colour of a transparent fragment over its cluster's list (`ALL_LIGHTS`: every
-/// light); a fragment whose cluster has no list is counted ([`OIT_COUNTER_UNLISTED`]) and lit by
+/// Where a transparent fragment's light list lies, by the technique's lists (`p.draw.lists`): a
+/// plain struct rather than an enum with fields (simple for the SPIR-V backend).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FragmentList {
+    /// `LIST_RANGE`, `LIST_LINKED` or `LIST_NONE`.
+    pub kind: u32,
+    /// `LIST_RANGE`: the first entry of the index list; `LIST_LINKED`: the tile's head.
+    pub first: u32,
+    /// `LIST_RANGE`: entries.
+    pub count: u32,
+}
+
+/// Entries `first..first + count` of the index list (page table, dense grid, tile arrays).
+pub const LIST_RANGE: u32 = 0;
+/// A tile's linked list from its head (`forward-plus --fp-lists linked`).
+pub const LIST_LINKED: u32 = 1;
+/// No list: the fragment's cluster was not marked (counted as `OIT_COUNTER_UNLISTED`), or the
+/// frame's tile lists overflowed their buffer (it grows and the frame re-runs).
+pub const LIST_NONE: u32 = 2;
+
+impl FragmentList {
+    const NONE: Self = Self { kind: LIST_NONE, first: 0, count: 0 };
+
+    fn range(first: u32, count: u32) -> Self {
+        Self { kind: LIST_RANGE, first, count }
+    }
+}
+
+/// The list of the fragment at `(px, py)` with depth `z_buf`. The buffers mean, by `lists`:
+/// page table — `page_base`, `slot_rank`, `unique`, the cluster counters, `counts`, `offsets`,
+/// `list` as their names say; dense grid — `cluster_counters` the clusters' flags, `counts`,
+/// `offsets`, `list` per dense cluster; tiles — `cluster_counters` Forward+'s counters (overflow
+/// check against `light_capacity`), `counts` the tiles' `(offset, count)` pairs or heads, `list`
+/// the indices or nodes.
+#[inline]
+pub fn fragment_list(p: &TransparentParams, b: &TransparentBuffers<'_>, px: u32, py: u32, z_buf: f32) -> FragmentList {
+    let f = &p.frame;
+    let g = &f.grid;
+    let lists = p.draw.lists;
+    if lists == TRANSPARENT_TILE_ARRAYS || lists == TRANSPARENT_TILE_LINKED {
+        if b.cluster_counters[FP_COUNTER_REFS as usize] > f.light_capacity {
+            return FragmentList::NONE;
+        }
+        let (tx, ty) = g.tile_of_pixel(px, py);
+        let tile = ty * g.tiles_x + tx;
+        return if lists == TRANSPARENT_TILE_ARRAYS {
+            FragmentList::range(b.counts[2 * tile as usize], b.counts[2 * tile as usize + 1])
+        } else {
+            FragmentList { kind: LIST_LINKED, first: b.counts[tile as usize], count: 0 }
+        };
+    }
+    let c = if lists == TRANSPARENT_DENSE_GRID {
+        let c = dense_grid::pixel_cluster(g, b.bounds, px, py, z_buf);
+        if c == dense_grid::NO_CLUSTER || b.cluster_counters[c as usize] == 0 {
+            NO_CLUSTER
+        } else {
+            c
+        }
+    } else {
+        let clusters = b.cluster_counters[COUNTER_UNIQUE_CLUSTERS as usize];
+        fragment_cluster(g, b.bounds, b.page_base, b.slot_rank, b.unique, clusters, px, py, z_buf)
+    };
+    if c == NO_CLUSTER {
+        FragmentList::NONE
+    } else {
+        FragmentList::range(b.offsets[c as usize], b.counts[c as usize])
+    }
+}
+
+/// The tonemapped colour of a transparent fragment over its list ([`fragment_list`];
+/// `ALL_LIGHTS`: every light); a fragment whose cluster has no list is counted
+/// ([`OIT_COUNTER_UNLISTED`]; not a tile technique's overflowed frame, which re-runs) and lit by
 /// no light.
 #[inline]
 pub fn transparent_colour<const ALL_LIGHTS: bool>(
@@ -240,15 +360,17 @@ pub fn transparent_colour<const ALL_LIGHTS: bool>(
     let count = if ALL_LIGHTS {
         shade_sum(f, &surface, b.lights, &shading::light_range(0, f.num_lights), &mut sum)
     } else {
-        let clusters = b.cluster_counters[COUNTER_UNIQUE_CLUSTERS as usize];
-        let c = fragment_cluster(&f.grid, b.bounds, b.page_base, b.slot_rank, b.unique, clusters, px, py, frag.z);
-        if c == NO_CLUSTER {
-            atomic_add(&mut oit_counters[OIT_COUNTER_UNLISTED as usize], 1);
-            0
+        let list = b.list;
+        let l = fragment_list(p, b, px, py, frag.z);
+        if l.kind == LIST_RANGE {
+            shade_sum(f, &surface, b.lights, &shading::index_range(l.first, l.count, move |t| list[t as usize]), &mut sum)
+        } else if l.kind == LIST_LINKED {
+            shade_sum(f, &surface, b.lights, &shading::linked_lights(l.first, list), &mut sum)
         } else {
-            let list = b.list;
-            let range = shading::index_range(b.offsets[c as usize], b.counts[c as usize], move |t| list[t as usize]);
-            shade_sum(f, &surface, b.lights, &range, &mut sum)
+            if p.draw.lists <= TRANSPARENT_DENSE_GRID {
+                atomic_add(&mut oit_counters[OIT_COUNTER_UNLISTED as usize], 1);
+            }
+            0
         }
     };
     shading::lit_colour(f, sum, count)

@@ -28,7 +28,7 @@ fn params(grid: ClusterGrid, stage: u32, capacity: u32) -> TransparentParams {
         exposure: 1.0,
         heat_max: 64,
     };
-    let draw = TransparentDraw { albedo: [0.5; 3], material: 0, normal_precision: PRECISION_OCT16, first_primitive: 7, capacity, stage };
+    let draw = TransparentDraw { albedo: [0.5; 3], material: 0, normal_precision: PRECISION_OCT16, first_primitive: 7, capacity, lists: stage };
     TransparentParams { frame, draw }
 }
 
@@ -130,4 +130,82 @@ fn the_insert_counts_every_fragment_and_stores_those_that_fit() {
     assert_eq!((nodes[1].next, nodes[0].next), (0, OIT_END));
     assert_eq!((nodes[0].tie, nodes[1].tie), (7, 8), "tie = the draw's first primitive + PrimitiveId");
     assert_eq!(heads.iter().filter(|&&h| h != OIT_END).count(), 1);
+}
+
+/// Buffers of a lookup test: `flags` as the cluster counters, `tiles` as the counts (tile
+/// techniques) or per-cluster `counts`/`offsets` (dense grid).
+fn lookup_buffers<'a>(bounds: &'a [f32], counters: &'a [u32], counts: &'a [u32], offsets: &'a [u32]) -> TransparentBuffers<'a> {
+    TransparentBuffers { bounds, page_base: &[], slot_rank: &[], unique: &[], cluster_counters: counters, counts, offsets, list: &[], lights: &[], materials: &[] }
+}
+
+/// `clustered-aabb`: the pre-pass flags each fragment's dense cluster beside the opaque pixels'
+/// flags; the lookup gives that cluster's range, and a cluster left unflagged has no list.
+#[test]
+fn dense_grid_fragments_flag_and_find_their_clusters() {
+    let grid = ClusterGrid::new(64, 36, 32, 0.1, 1000.0, 1.0).unwrap();
+    let bounds = slice_bounds(&grid);
+    let n = dense_grid::cluster_count(&grid) as usize;
+    let fragments: Vec<(u32, u32, f32)> = [(3, 10, 2.0), (40, 20, 5.0), (63, 35, 20.0), (10, 1, 5.0)].iter().map(|&(x, y, d)| (x, y, 0.1 / d)).collect();
+    let frag = |&(x, y, z): &(u32, u32, f32)| Vec4::new(x as f32 + 0.5, y as f32 + 0.5, z, 1.0);
+    let counts: Vec<u32> = (0..n as u32).map(|c| c % 7).collect();
+    let offsets: Vec<u32> = (0..n as u32).map(|c| 3 * c).collect();
+    for prepass in [true, false] {
+        let mut flags = vec![0u32; n];
+        let p = params(grid, TRANSPARENT_DENSE_GRID, 0);
+        if prepass {
+            for f in &fragments {
+                mark_cluster(&p, &bounds, &mut flags, &[], &mut [], frag(f));
+            }
+        }
+        let b = lookup_buffers(&bounds, &flags, &counts, &offsets);
+        for f in &fragments {
+            let c = dense_grid::pixel_cluster(&grid, &bounds, f.0, f.1, f.2);
+            let got = fragment_list(&p, &b, f.0, f.1, f.2);
+            if prepass {
+                assert_eq!(flags[c as usize], 1, "fragment {f:?} flags its cluster");
+                assert_eq!(got, FragmentList::range(offsets[c as usize], counts[c as usize]), "fragment {f:?}");
+            } else {
+                assert_eq!(got, FragmentList::NONE, "fragment {f:?}: an unflagged cluster has no list");
+            }
+        }
+    }
+}
+
+/// `forward-plus`: the pre-pass widens each tile's depth range to its fragments; the lookup gives
+/// the tile's range (arrays) or head (linked lists), and nothing in a frame whose lists overflowed.
+#[test]
+fn tile_fragments_widen_their_tile_and_find_its_list() {
+    let grid = ClusterGrid::new(64, 36, 16, 0.1, 1000.0, 1.0).unwrap();
+    let tiles = (grid.tiles_x * grid.tiles_y) as usize;
+    let fragments: Vec<(u32, u32, f32)> = [(3, 10, 2.0), (5, 12, 9.0), (40, 20, 5.0)].iter().map(|&(x, y, d)| (x, y, 0.1 / d)).collect();
+    let frag = |&(x, y, z): &(u32, u32, f32)| Vec4::new(x as f32 + 0.5, y as f32 + 0.5, z, 1.0);
+    let mut words = vec![0u32; TILE_DEPTH_WORDS as usize * tiles];
+    for f in &fragments {
+        mark_cluster(&params(grid, TRANSPARENT_TILE_ARRAYS, 0), &[], &mut words, &[], &mut [], frag(f));
+    }
+    let dist = |z: f32| crate::reconstruct::distance_from_depth(grid.near, z);
+    let tile = |x: u32, y: u32| {
+        let (tx, ty) = grid.tile_of_pixel(x, y);
+        (ty * grid.tiles_x + tx) as usize
+    };
+    let t0 = tile(3, 10);
+    assert_eq!((!words[2 * t0], words[2 * t0 + 1]), (dist(0.1 / 2.0).to_bits(), dist(0.1 / 9.0).to_bits()), "the first tile spans 2 to 9 m");
+    let marked = words.chunks(2).filter(|w| w[1] != 0).count();
+    assert_eq!(marked, 2, "two tiles hold fragments");
+    let ranges: Vec<u32> = (0..2 * tiles as u32).collect();
+    for (lists, overflow) in [(TRANSPARENT_TILE_ARRAYS, false), (TRANSPARENT_TILE_LINKED, false), (TRANSPARENT_TILE_ARRAYS, true)] {
+        let mut p = params(grid, lists, 0);
+        p.frame.light_capacity = 100;
+        let counters = [if overflow { 101 } else { 100 }];
+        let b = lookup_buffers(&[], &counters, &ranges, &[]);
+        for f in &fragments {
+            let t = tile(f.0, f.1) as u32;
+            let want = match (overflow, lists) {
+                (true, _) => FragmentList::NONE,
+                (false, TRANSPARENT_TILE_ARRAYS) => FragmentList::range(2 * t, 2 * t + 1),
+                _ => FragmentList { kind: LIST_LINKED, first: t, count: 0 },
+            };
+            assert_eq!(fragment_list(&p, &b, f.0, f.1, f.2), want, "lists {lists}, overflow {overflow}, fragment {f:?}");
+        }
+    }
 }

@@ -364,15 +364,31 @@ impl TileCull {
     }
 }
 
-/// Steps 1–3 for one invocation of tile `(tx, ty)` (module docs): its pixels, and the tile's
-/// depth bounds, frustum and (`mode == MODE_TILED_25D`) 2.5D mask. Called by every invocation of
-/// the workgroup (it synchronises).
+/// A tile depth range that widens nothing: `(lo, hi)` bits of view distances, `lo > hi`.
+pub const NO_WIDENING: (u32, u32) = (f32::MAX.to_bits(), 0);
+
+/// The view-distance range (`(lo, hi)` bits) of a tile's transparent fragments from its
+/// `TILE_DEPTH_WORDS` (`!min`, `max`, both kept by atomic max from 0): [`NO_WIDENING`] for a
+/// tile no transparent fragment reached.
 #[inline]
-pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &ClusterGrid, tx: u32, ty: u32, mode: u32, depth: &[f32]) -> (TilePixels, TileCull) {
+pub fn tile_widening(words: &[u32], tile: u32) -> (u32, u32) {
+    let w = (TILE_DEPTH_WORDS * tile) as usize;
+    let lo = !words[w];
+    (if lo < NO_WIDENING.0 { lo } else { NO_WIDENING.0 }, words[w + 1])
+}
+
+/// Steps 1–3 for one invocation of tile `(tx, ty)` (module docs): its pixels, and the tile's
+/// depth bounds, frustum and (`mode == MODE_TILED_25D`) 2.5D mask. The bounds also span `widen`
+/// (view-distance bits, [`tile_widening`]: Forward+'s transparent fragments; [`NO_WIDENING`]
+/// otherwise), and a widened tile's 2.5D mask keeps every cell (the mask knows opaque pixels
+/// only). Called by every invocation of the workgroup (it synchronises).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &ClusterGrid, tx: u32, ty: u32, mode: u32, depth: &[f32], widen: (u32, u32)) -> (TilePixels, TileCull) {
     let li = c.local_index();
     let mut px = TilePixels { pixels: [NO_PIXEL; 4], dist: [0.0; 4], geo: [0; 4] };
     // Bits of positive floats order like the floats.
-    let (mut lo, mut hi) = (f32::MAX.to_bits(), 0u32);
+    let (mut lo, mut hi) = widen;
     let mut slot = 0;
     while slot < MAX_PIXELS_PER_INVOCATION {
         let i = slot_pixel(g, tx, ty, li, slot);
@@ -391,7 +407,7 @@ pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &Cluster
     let (d_min, d_max) = (f32::from_bits(lo), f32::from_bits(hi));
     let cells = depth_cells(d_min, d_max);
     let mut mask = u32::MAX;
-    if mode == MODE_TILED_25D && !empty {
+    if mode == MODE_TILED_25D && !empty && widen.0 > widen.1 {
         let mut mine = 0;
         let mut slot = 0;
         while slot < MAX_PIXELS_PER_INVOCATION {

@@ -83,7 +83,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
 ) -> TileOutput {
     let fp = &p.frame;
     // 1–3.
-    let (px, cull) = tile_bounds(c, s, &fp.grid, tx, ty, p.mode, depth);
+    let (px, cull) = tile_bounds(c, s, &fp.grid, tx, ty, p.mode, depth, NO_WIDENING);
     let mut out = TileOutput { pixels: px.pixels, colours: [BACKGROUND_RGBA8; 4], tile_lights: 0, rounds: 0 };
     // 4–5 in rounds; each pixel's sum carries over from round to round (lights in index order).
     let mut sums = [Vec3::ZERO; MAX_PIXELS_PER_INVOCATION as usize];

@@ -38,6 +38,32 @@ use shaders::octahedral::Precision;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// A knob of the study (`bench --knobs`), by its number in the module doc.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Knob {
+    /// 1. normal encoding.
+    Normals,
+    /// 2. falloff / cutoff.
+    Falloff,
+    /// 3. tile size.
+    TileSize,
+    /// 4. culling test.
+    Culling,
+    /// 5. order-independent transparency (scenes with transparent materials).
+    Oit,
+}
+
+impl Knob {
+    pub const ALL: [Knob; 5] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit];
+}
+
+impl std::fmt::Display for Knob {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use clap::ValueEnum as _;
+        f.write_str(self.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default().as_str())
+    }
+}
+
 /// One knob setting, measured.
 #[derive(Clone, Debug)]
 pub struct AccuracyRow {
@@ -172,38 +198,47 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 lights_per_cluster: lists.mean_per_cluster,
             });
         };
+        let wants = |k: Knob| a.knobs.contains(&k);
         // 1: reference = brute force, float32 normals, window falloff.
-        let exact = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::F32))?;
-        for (p, label) in [(Precision::Oct8, "oct 2×8"), (Precision::Oct12, "oct 2×12"), (Precision::Oct16, "oct 2×16"), (Precision::F32, "float32")] {
-            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, a.tile_size, p))?;
-            measure("normal encoding", label.into(), &exact, &f, normal_error(&exact, &f));
+        if wants(Knob::Normals) {
+            let exact = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::F32))?;
+            for (p, label) in [(Precision::Oct8, "oct 2×8"), (Precision::Oct12, "oct 2×12"), (Precision::Oct16, "oct 2×16"), (Precision::F32, "float32")] {
+                let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, a.tile_size, p))?;
+                measure("normal encoding", label.into(), &exact, &f, normal_error(&exact, &f));
+            }
         }
-        // 3: reference = brute force, 2×16-bit normals (as the rows), window falloff.
-        let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
-        for (effect, label) in [(0, "sphere–AABB"), (EFFECT_CULL_PLANES, "sphere–frustum planes"), (EFFECT_CULL_EXACT, "exact sphere–frustum")] {
-            let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, Precision::Oct16))?;
-            measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
-        }
-        for tile in [16, 32, 64] {
-            let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, Precision::Oct16))?;
-            measure("tile size", format!("{tile} px ({} slices)", f.grid.num_slices), &reference, &f, None);
+        // 3 and 4: reference = brute force, 2×16-bit normals (as the rows), window falloff.
+        if wants(Knob::Culling) || wants(Knob::TileSize) {
+            let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
+            let culling: &[(u32, &str)] = if wants(Knob::Culling) { &[(0, "sphere–AABB"), (EFFECT_CULL_PLANES, "sphere–frustum planes"), (EFFECT_CULL_EXACT, "exact sphere–frustum")] } else { &[] };
+            for &(effect, label) in culling {
+                let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, Precision::Oct16))?;
+                measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
+            }
+            let tiles: &[u32] = if wants(Knob::TileSize) { &[16, 32, 64] } else { &[] };
+            for &tile in tiles {
+                let f = run(&base, 0, &settings(a, Technique::ClusteredBvh, tile, Precision::Oct16))?;
+                measure("tile size", format!("{tile} px ({} slices)", f.grid.num_slices), &reference, &f, None);
+            }
         }
         // 2: reference = brute force with the uncut inverse square.
-        let uncut: Vec<_> = base.iter().map(|l| PointLight { radius: 1e30, ..*l }).collect();
-        let s = settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16);
-        let reference = run(&uncut, EFFECT_INVERSE_SQUARE_CUT, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
-        let f = run(&base, 0, &s)?;
-        measure("falloff", "Karis window (scene radii)".into(), &reference, &f, None);
-        for eps in [1e-2f32, 1e-3, 1e-4] {
-            let cut: Vec<_> = base
-                .iter()
-                .map(|l| PointLight { radius: shaders::lighting::cut_radius(l.intensity * l.colour.iter().fold(0f32, |m, &c| m.max(c)), eps), ..*l })
-                .collect();
-            let f = run(&cut, EFFECT_INVERSE_SQUARE_CUT, &s)?;
-            measure("falloff", format!("inverse square cut at ε = {eps:e}"), &reference, &f, None);
+        if wants(Knob::Falloff) {
+            let uncut: Vec<_> = base.iter().map(|l| PointLight { radius: 1e30, ..*l }).collect();
+            let s = settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16);
+            let reference = run(&uncut, EFFECT_INVERSE_SQUARE_CUT, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
+            let f = run(&base, 0, &s)?;
+            measure("falloff", "Karis window (scene radii)".into(), &reference, &f, None);
+            for eps in [1e-2f32, 1e-3, 1e-4] {
+                let cut: Vec<_> = base
+                    .iter()
+                    .map(|l| PointLight { radius: shaders::lighting::cut_radius(l.intensity * l.colour.iter().fold(0f32, |m, &c| m.max(c)), eps), ..*l })
+                    .collect();
+                let f = run(&cut, EFFECT_INVERSE_SQUARE_CUT, &s)?;
+                measure("falloff", format!("inverse square cut at ε = {eps:e}"), &reference, &f, None);
+            }
         }
         // 5: reference = the exact setting itself (see the module doc).
-        if scene.has_transparency() {
+        if wants(Knob::Oit) && scene.has_transparency() {
             let oit = |variant| Settings { oit: variant, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) };
             let frames: Vec<Frame> = OIT_SETTINGS.iter().map(|&(variant, _)| run(&base, 0, &oit(variant))).collect::<Result<_>>()?;
             for (f, (_, label)) in frames.iter().zip(OIT_SETTINGS) {

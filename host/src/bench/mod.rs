@@ -89,6 +89,11 @@ pub struct BenchArgs {
     /// count closest to 10k; writes accuracy.csv, results.md and a Pareto plot per scene).
     #[arg(long, value_enum)]
     pub study: Option<Study>,
+    /// The accuracy study's knobs to measure (comma-separated; default: every knob). Without the
+    /// first four, no brute-force reference is rendered (`oit` alone on a scene with many
+    /// transparent layers: brute force would shade every light for every transparent fragment).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = accuracy::Knob::ALL)]
+    pub knobs: Vec<accuracy::Knob>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -32,8 +32,8 @@
 //! staged lists, 256 B per cluster for up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB).
 use super::bvh::LightBvh;
 use super::scan::{Counted, DeviceScan};
-use super::technique::{grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
-use super::transparent::{ClusterInputs, Transparency, TransparencyStats};
+use super::technique::{grew_together, grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
+use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{bail, Context as _, Result};
@@ -74,7 +74,7 @@ impl Clustered {
     fn new(gpu: &Gpu, f: &FrameInputs<'_>, bvh: Option<LightBvh>) -> Result<Self> {
         let grid = f.params.grid;
         let caps = Capacities::initial(&grid, f.params.num_lights);
-        let transparency = Transparency::new(f, &gpu.ctx, false).context("creating the transparent pass")?;
+        let transparency = Transparency::new(f, &gpu.ctx, Some(TRANSPARENT_MARK_PAGES)).context("creating the transparent pass")?;
         let buffers = ClusterBuffers::new(gpu, &grid, caps, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
         Ok(Self { bvh, grid, buffers, transparency, last: (0, 0, 0) })
     }
@@ -97,15 +97,8 @@ impl LightingTechnique for Clustered {
     }
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
-        let nodes = match self.transparency.as_mut() {
-            Some(t) => t.grow_if_needed(&gpu.ctx)?,
-            None => None,
-        };
-        let lists = self.grow_lists(gpu)?;
-        Ok(match (nodes, lists) {
-            (Some(a), Some(b)) => Some(format!("{a}, {b}")),
-            (a, b) => a.or(b),
-        })
+        let nodes = Transparency::grow(self.transparency.as_mut(), &gpu.ctx)?;
+        Ok(grew_together(nodes, self.grow_lists(gpu)?))
     }
 
     fn transparency(&self) -> Option<TransparencyStats> {
@@ -284,7 +277,10 @@ impl ClusterBuffers {
             rec.fill(&self.counters, 0);
             rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &self.marks], p, n)?;
             match transparency {
-                Some(t) => t.record_clusters(rec, f, p, ImageUse::CopySource, TRANSPARENT_MARK_PAGES, &self.marks, &self.page_base, &self.slots),
+                Some(t) => {
+                    let m = Marks { stage: TRANSPARENT_MARK_PAGES, marks: &self.marks, page_table: Some((&self.page_base, &self.slots)) };
+                    t.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::CopySource }, &m)
+                }
                 None => Ok(()),
             }
         })?;
@@ -293,7 +289,8 @@ impl ClusterBuffers {
             rec.dispatch_linear(&k.record_pages, &[&self.marks, &self.page_base, &self.page_of_alloc], &with(self.page_count), self.page_count)?;
             rec.dispatch_linear(&k.store_slots, &[&self.keys, &self.page_base, &self.slots], p, n)?;
             if let Some(t) = transparency {
-                t.record_clusters(rec, f, p, ImageUse::DepthTarget, TRANSPARENT_STORE_SLOTS, &self.marks, &self.page_base, &self.slots)?;
+                let m = Marks { stage: TRANSPARENT_STORE_SLOTS, marks: &self.marks, page_table: Some((&self.page_base, &self.slots)) };
+                t.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, &m)?;
             }
             // The slots of the allocated pages only: scanned and compacted for the pages counted.
             let allocated = Counted { counter: COUNTER_PAGES, scale: PAGE_SIZE };
@@ -359,7 +356,7 @@ impl ClusterBuffers {
             offsets: &self.offsets,
             list: &self.list,
         };
-        t.record_shade(rec, f, p, ImageUse::DepthTarget, Some(&c))
+        t.record_shade(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, Some(&c))
     }
 
     /// Reads the cluster data back (tests, statistics).

@@ -6,18 +6,26 @@
 //! ends at the references the frame needs; if that exceeds the buffer, the buffer grows (needed +
 //! 25 %) and the frame re-runs, so no light is ever dropped.
 //!
+//! Scenes with transparent draws (`transparent.rs`): after the opaque pixels flag their clusters,
+//! a raster pre-pass of the transparent draws flags the dense clusters of their fragments
+//! (`TRANSPARENT_DENSE_GRID`), so the compaction and assignment give them lists; after the
+//! shading, the transparent pass reads those lists and its resolve composites.
+//!
 //! Memory: see the shader module (boxes 32 B, flags/offsets/counts 4 B each per grid cluster;
-//! active list; 4 B per pixel; 4 B per light reference).
-use super::technique::{grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+//! active list, of `min(clusters, pixels)` entries — every cluster with transparent draws; 4 B
+//! per pixel; 4 B per light reference).
+use super::technique::{grew_together, grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Recorder, VkResult};
+use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{Context as _, Result};
 use shaders::clustered_aabb::{cluster_count, AABB_COUNTER_ACTIVE, AABB_COUNTER_REFS};
-use shaders::layout::{FrameParams, COUNTERS};
+use shaders::layout::{FrameParams, COUNTERS, TRANSPARENT_DENSE_GRID};
 
 pub struct ClusteredAabb {
     clusters: u32,
-    /// Assignment invocations: `min(clusters, pixels)` (the most clusters a frame can touch).
+    /// Assignment invocations: the most clusters a frame can touch (`min(clusters, pixels)`
+    /// without transparent draws, every cluster with them).
     slots: u32,
     pub capacity: u32,
     boxes: Buffer,
@@ -30,20 +38,26 @@ pub struct ClusteredAabb {
     counters: Buffer,
     /// `(active clusters, light references needed)` of the last frame.
     last: (u32, u32),
+    /// The transparent pass, for scenes with transparent draws.
+    transparency: Option<Transparency>,
 }
 
 impl ClusteredAabb {
     /// Allocates for the frame's grid and computes every cluster's box.
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
-        Self::allocate(gpu, &f.params, f.bounds, initial_list_capacity(f.params.num_lights)).context("allocating the clustered-aabb buffers")
+        let transparency = Transparency::new(f, &gpu.ctx, Some(TRANSPARENT_DENSE_GRID)).context("creating the transparent pass")?;
+        let mut t = Self::allocate(gpu, &f.params, f.bounds, initial_list_capacity(f.params.num_lights), transparency.is_some()).context("allocating the clustered-aabb buffers")?;
+        t.transparency = transparency;
+        Ok(t)
     }
 
-    /// Allocates for `p`'s grid and computes every cluster's box (`bounds`: the slice table).
-    fn allocate(gpu: &Gpu, p: &FrameParams, bounds: &Buffer, capacity: u32) -> VkResult<Self> {
+    /// Allocates for `p`'s grid and computes every cluster's box (`bounds`: the slice table);
+    /// `transparent`: the scene has transparent draws.
+    fn allocate(gpu: &Gpu, p: &FrameParams, bounds: &Buffer, capacity: u32, transparent: bool) -> VkResult<Self> {
         let ctx = &gpu.ctx;
         let clusters = cluster_count(&p.grid);
         let pixels = p.grid.width * p.grid.height;
-        let slots = clusters.min(pixels);
+        let slots = if transparent { clusters } else { clusters.min(pixels) };
         let words = |name: &str, n: u32| {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::storage(ctx, name, 4 * n as u64)
@@ -64,10 +78,29 @@ impl ClusteredAabb {
             list: words("light lists", capacity)?,
             counters: words("counters", COUNTERS)?,
             last: (0, 0),
+            transparency: None,
         };
         let q = FrameParams { count: clusters, ..*p };
         gpu.run(None, |rec| rec.dispatch_linear(&gpu.kernels.aabb_bounds, &[bounds, &b.boxes], &q, clusters))?;
         Ok(b)
+    }
+
+    /// Reads the frame's totals; grows the list buffer to the references needed + 25 % when
+    /// they did not fit.
+    fn grow_list(&mut self, gpu: &Gpu) -> Result<Option<String>> {
+        self.last = self.totals()?;
+        let need = self.last.1;
+        if need <= self.capacity {
+            return Ok(None);
+        }
+        let grown = grown_capacity(need);
+        crate::vk::memory::check_range(&gpu.ctx, "light lists", 4 * grown as u64).and_then(|()| {
+            self.list = Buffer::storage(&gpu.ctx, "light lists", 4 * grown as u64)?;
+            Ok(())
+        })
+        .with_context(|| format!("growing the light list to {grown} references"))?;
+        self.capacity = grown;
+        Ok(Some(format!("light list to {grown} references")))
     }
 
     /// `(active clusters, light references needed)` of the last frame.
@@ -88,6 +121,10 @@ impl LightingTechnique for ClusteredAabb {
             rec.fill(&self.flags, 0);
             rec.fill(&self.counters, 0);
             rec.dispatch_linear(&k.aabb_mark, &[&g.depth_buf, f.bounds, &self.pixel_clusters, &self.flags], &p, n)?;
+            if let Some(t) = &self.transparency {
+                let m = Marks { stage: TRANSPARENT_DENSE_GRID, marks: &self.flags, page_table: None };
+                t.record_clusters(rec, f, &p, OpaqueDepth { image: &g.depth, from: ImageUse::CopySource }, &m)?;
+            }
             rec.dispatch_linear(&k.aabb_compact, &[&self.flags, &self.counters, &self.active], &FrameParams { count: self.clusters, ..p }, self.clusters)
         })?;
         rec.pass("assignment", |rec| {
@@ -105,24 +142,19 @@ impl LightingTechnique for ClusteredAabb {
                 &p,
                 n,
             )
-        })
+        })?;
+        let Some(t) = &self.transparency else { return Ok(()) };
+        // The pre-pass left the depth a depth target.
+        let from = ImageUse::DepthTarget;
+        let lists = ClusterInputs::dense_grid(&self.flags, &self.counts, &self.offsets, &self.list);
+        t.record_shade(rec, f, &p, OpaqueDepth { image: &g.depth, from }, Some(&lists))
     }
 
-    /// The list buffer grows to the references the frame needed + 25 %.
+    /// The node buffer of the transparent pass and the list buffer grow to what the frame
+    /// needed + 25 %.
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
-        self.last = self.totals()?;
-        let need = self.last.1;
-        if need <= self.capacity {
-            return Ok(None);
-        }
-        let grown = grown_capacity(need);
-        crate::vk::memory::check_range(&gpu.ctx, "light lists", 4 * grown as u64).and_then(|()| {
-            self.list = Buffer::storage(&gpu.ctx, "light lists", 4 * grown as u64)?;
-            Ok(())
-        })
-        .with_context(|| format!("growing the light list to {grown} references"))?;
-        self.capacity = grown;
-        Ok(Some(format!("light list to {grown} references")))
+        let nodes = Transparency::grow(self.transparency.as_mut(), &gpu.ctx)?;
+        Ok(grew_together(nodes, self.grow_list(gpu)?))
     }
 
     /// Active clusters, references, and the longest list among the active clusters.
@@ -134,10 +166,16 @@ impl LightingTechnique for ClusteredAabb {
         Ok(ListStats { clusters: active, light_refs: refs, max_list, ..ListStats::default() })
     }
 
+    fn transparency(&self) -> Option<TransparencyStats> {
+        self.transparency.as_ref().map(Transparency::stats)
+    }
+
     fn buffers(&self) -> Vec<(String, u64)> {
-        [&self.boxes, &self.flags, &self.active, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters]
+        let mut v: Vec<(String, u64)> = [&self.boxes, &self.flags, &self.active, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters]
             .iter()
             .map(|b| (b.name.clone(), b.size))
-            .collect()
+            .collect();
+        v.extend(self.transparency.iter().flat_map(Transparency::buffers));
+        v
     }
 }

@@ -3,7 +3,7 @@
 //! those of the transparent pass (`transparent.rs`, every light for every transparent fragment
 //! and the `--oit` resolve), for scenes with transparent draws.
 use super::technique::{FrameInputs, LightingTechnique};
-use super::transparent::{Transparency, TransparencyStats};
+use super::transparent::{OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
 use crate::vk::{ImageUse, Recorder, VkResult};
 use anyhow::{Context as _, Result};
@@ -14,7 +14,7 @@ pub struct Deferred {
 
 impl Deferred {
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
-        Ok(Self { transparency: Transparency::new(f, &gpu.ctx, true).context("creating the transparent pass")? })
+        Ok(Self { transparency: Transparency::new(f, &gpu.ctx, None).context("creating the transparent pass")? })
     }
 }
 
@@ -30,16 +30,13 @@ impl LightingTechnique for Deferred {
             )
         })?;
         match &self.transparency {
-            Some(tr) => tr.record_shade(rec, f, p, ImageUse::CopySource, None),
+            Some(tr) => tr.record_shade(rec, f, p, OpaqueDepth { image: &t.depth, from: ImageUse::CopySource }, None),
             None => Ok(()),
         }
     }
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
-        match self.transparency.as_mut() {
-            Some(t) => t.grow_if_needed(&gpu.ctx),
-            None => Ok(None),
-        }
+        Transparency::grow(self.transparency.as_mut(), &gpu.ctx)
     }
 
     fn transparency(&self) -> Option<TransparencyStats> {

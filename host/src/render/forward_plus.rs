@@ -12,21 +12,31 @@
 //!    fragment walking its tile's linked list or reading its tile's index range; the colour
 //!    target is copied into the frame.
 //!
+//! Scenes with transparent draws (`transparent.rs`) add, after step 1, a raster pre-pass of the
+//! transparent draws against the pre-pass depth that widens each tile's depth range to its
+//! transparent fragments (`TILE_DEPTH_WORDS` per tile); step 2 then culls with the
+//! `_widened` kernel, whose tile bounds span the opaque depths and those ranges together (one list
+//! per tile serves both: Harada et al. keep a second list for transparent geometry; one widened
+//! list is conservative for both and costs no second culling pass). After step 3 the transparent
+//! pass reads the tile lists and its resolve composites into the frame.
+//!
 //! The node or index buffer's capacity is the one view-dependent size: the culling counter ends
 //! at the light references the frame needs; if that exceeds the buffer, it grows (need + 25 %)
 //! and the frame re-runs.
 //!
 //! Memory: `linked` heads 4 B per tile and nodes 8 B per light reference, `array` ranges 8 B per
 //! tile and indices 4 B per light reference; both the reversed index list, and a depth, a colour
-//! and a winning-draw target (4 B per pixel each) plus the winners' buffer copy.
-use super::technique::{grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+//! and a winning-draw target (4 B per pixel each) plus the winners' buffer copy; with transparent
+//! draws 8 B per tile of depth ranges and the transparent pass's buffers.
+use super::technique::{grew_together, grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use super::Draw;
-use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
-use crate::vk::{Attachment, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
+use crate::gpu::{Gpu, COMPUTE_SPV, FORWARD_COLOUR_FORMAT};
+use crate::vk::{Attachment, Buffer, ComputePipeline, GraphicsPipeline, Image, ImageUse, Load, Recorder, ShaderModule, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
-use shaders::forward_plus::{FP_COUNTER_REFS, MAX_LIGHTS_LLVMPIPE};
+use shaders::forward_plus::MAX_LIGHTS_LLVMPIPE;
 use shaders::shading::NO_NODE;
-use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS};
+use shaders::layout::{ForwardParams, FrameParams, TiledParams, COUNTERS, FP_COUNTER_REFS, TILE_DEPTH_WORDS, TRANSPARENT_TILE_ARRAYS, TRANSPARENT_TILE_LINKED};
 use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED};
 
 /// Layout of Forward+'s per-tile light lists (`render --fp-lists`).
@@ -72,6 +82,14 @@ impl TileLists {
         }
     }
 
+    /// `TransparentDraw::lists` of the layout.
+    fn transparent_lists(self) -> u32 {
+        match self {
+            Self::Linked => TRANSPARENT_TILE_LINKED,
+            Self::Array => TRANSPARENT_TILE_ARRAYS,
+        }
+    }
+
     /// Names of the tile buffer and the entry buffer.
     fn buffer_names(self) -> (&'static str, &'static str) {
         match self {
@@ -79,6 +97,14 @@ impl TileLists {
             Self::Array => ("tile light ranges", "tile light indices"),
         }
     }
+}
+
+/// What scenes with transparent draws add: the transparent pass, the tiles' transparent depth
+/// ranges and the culling kernel that widens the tiles' bounds to them.
+struct TransparentTiles {
+    pass: Transparency,
+    depths: Buffer,
+    cull: ComputePipeline<TiledParams>,
 }
 
 pub struct ForwardPlus {
@@ -102,6 +128,8 @@ pub struct ForwardPlus {
     params: TiledParams,
     /// Light references the last frame needed.
     last_refs: u32,
+    /// Scenes with transparent draws.
+    transparent: Option<TransparentTiles>,
 }
 
 impl ForwardPlus {
@@ -121,6 +149,15 @@ impl ForwardPlus {
         let lists = f.settings.fp_lists;
         let tile_bytes = 4 * lists.words().0 * (g.tiles_x * g.tiles_y) as u64;
         let reversed: Vec<u32> = f.indices.chunks_exact(3).rev().flatten().copied().collect();
+        let transparent = match Transparency::new(f, ctx, Some(lists.transparent_lists())).context("creating the transparent pass")? {
+            None => None,
+            Some(pass) => {
+                let module = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
+                let depths = Buffer::storage(ctx, "tile transparent depths", 4 * TILE_DEPTH_WORDS as u64 * (g.tiles_x * g.tiles_y) as u64)?;
+                let cull = ComputePipeline::new(ctx, &module, shaders::kernels::FORWARD_PLUS_CULL_WIDENED[lists.index()])?;
+                Some(TransparentTiles { pass, depths, cull })
+            }
+        };
         let made = (|| -> VkResult<Self> {
             Ok(Self {
                 depth: Image::target(ctx, "forward+ depth", w, h, TargetFormat::Depth32)?,
@@ -136,6 +173,7 @@ impl ForwardPlus {
                 capacity,
                 params: TiledParams { frame: *frame, mode: MODE_TILED, _pad: [0; 3] },
                 last_refs: 0,
+                transparent,
             })
         })();
         made.context("allocating the forward+ buffers")
@@ -222,7 +260,14 @@ impl LightingTechnique for ForwardPlus {
             rec.transition(&self.depth, ImageUse::DepthTarget, ImageUse::CopySource);
             rec.copy_to_buffers(&[(&self.winner, &self.winners), (&self.depth, &f.targets.depth_buf)]);
             rec.transition(&self.depth, ImageUse::CopySource, ImageUse::DepthTarget);
-            Ok(())
+            match &self.transparent {
+                Some(t) => {
+                    rec.fill(&t.depths, 0);
+                    let m = Marks { stage: self.lists.transparent_lists(), marks: &t.depths, page_table: None };
+                    t.pass.record_clusters(rec, f, &self.params.frame, OpaqueDepth { image: &self.depth, from: ImageUse::DepthTarget }, &m)
+                }
+                None => Ok(()),
+            }
         })?;
         rec.pass("culling", |rec| {
             if self.lists == TileLists::Linked {
@@ -231,8 +276,14 @@ impl LightingTechnique for ForwardPlus {
             rec.fill(&self.counters, 0);
             let g = &self.params.frame.grid;
             let p = TiledParams { frame: FrameParams { light_capacity: self.capacity, ..self.params.frame }, ..self.params };
-            let cull = &gpu.kernels.forward_plus_cull[self.lists.index()];
-            rec.dispatch(cull, &[&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries], &p, [g.tiles_x, g.tiles_y, 1])?;
+            let buffers = [&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries];
+            match &self.transparent {
+                None => rec.dispatch(&gpu.kernels.forward_plus_cull[self.lists.index()], &buffers, &p, [g.tiles_x, g.tiles_y, 1])?,
+                Some(t) => {
+                    let widened: Vec<&Buffer> = buffers.into_iter().chain([&t.depths]).collect();
+                    rec.dispatch(&t.cull, &widened, &p, [g.tiles_x, g.tiles_y, 1])?
+                }
+            }
             // The lists (and the counter) are read by the forward pass's fragments; every
             // workgroup writes its tile's range (`array`), so only the heads need a fill.
             rec.fragments_read_earlier_writes();
@@ -248,20 +299,20 @@ impl LightingTechnique for ForwardPlus {
             rec.transition(&self.colour, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.copy_to_buffers(&[(&self.colour, f.frame)]);
             Ok(())
-        })
+        })?;
+        let Some(t) = &self.transparent else { return Ok(()) };
+        let frame = FrameParams { light_capacity: self.capacity, ..self.params.frame };
+        let lists = ClusterInputs::tiles(&self.counters, &self.tiles, &self.entries);
+        t.pass.record_shade(rec, f, &frame, OpaqueDepth { image: &self.depth, from: ImageUse::DepthTarget }, Some(&lists))
     }
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
-        let c: Vec<u32> = self.counters.read(COUNTERS as usize)?;
-        self.last_refs = c[FP_COUNTER_REFS as usize];
-        if self.last_refs <= self.capacity {
-            return Ok(None);
-        }
-        let grown = grown_capacity(self.last_refs);
-        let name = self.lists.buffer_names().1;
-        self.entries = Self::entry_buffer(gpu, self.lists, grown).with_context(|| format!("growing the {name} to {grown} light references"))?;
-        self.capacity = grown;
-        Ok(Some(format!("{name} to {grown} light references")))
+        let nodes = Transparency::grow(self.transparent.as_mut().map(|t| &mut t.pass), &gpu.ctx)?;
+        Ok(grew_together(nodes, self.grow_entries(gpu)?))
+    }
+
+    fn transparency(&self) -> Option<TransparencyStats> {
+        self.transparent.as_ref().map(|t| t.pass.stats())
     }
 
     fn stats(&mut self) -> Result<ListStats> {
@@ -277,13 +328,35 @@ impl LightingTechnique for ForwardPlus {
     fn buffers(&self) -> Vec<(String, u64)> {
         let g = &self.params.frame.grid;
         let targets = 12 * g.width as u64 * g.height as u64;
-        vec![
+        let mut v = vec![
             (self.tiles.name.clone(), self.tiles.size),
             (self.entries.name.clone(), self.entries.size),
             (self.counters.name.clone(), self.counters.size),
             (self.winners.name.clone(), self.winners.size),
             (self.reversed.name.clone(), self.reversed.size),
             ("forward+ targets".into(), targets),
-        ]
+        ];
+        if let Some(t) = &self.transparent {
+            v.push((t.depths.name.clone(), t.depths.size));
+            v.extend(t.pass.buffers());
+        }
+        v
+    }
+}
+
+impl ForwardPlus {
+    /// Reads the counter; grows the node or index buffer to the references needed + 25 % when
+    /// they did not fit.
+    fn grow_entries(&mut self, gpu: &Gpu) -> Result<Option<String>> {
+        let c: Vec<u32> = self.counters.read(COUNTERS as usize)?;
+        self.last_refs = c[FP_COUNTER_REFS as usize];
+        if self.last_refs <= self.capacity {
+            return Ok(None);
+        }
+        let grown = grown_capacity(self.last_refs);
+        let name = self.lists.buffer_names().1;
+        self.entries = Self::entry_buffer(gpu, self.lists, grown).with_context(|| format!("growing the {name} to {grown} light references"))?;
+        self.capacity = grown;
+        Ok(Some(format!("{name} to {grown} light references")))
     }
 }

@@ -4,8 +4,8 @@
 //! report) and lives in its own file: `deferred.rs` (the brute-force reference), `clustered.rs`
 //! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
 //! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`; `transparent.rs`
-//! is the transparent pass `deferred` and the clustered techniques add for scenes with transparent
-//! materials (the others refuse such scenes: [`Technique::draws_transparency`]). The frame loop
+//! is the transparent pass every technique but the tiled ones adds for scenes with transparent
+//! materials (`tiled` and `tiled-2.5d` refuse such scenes: [`Technique::draws_transparency`]). The frame loop
 //! ([`render`]) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
 //! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
 //! frames, growth and re-run (at most [`technique::MAX_REGROWTHS`] times; a frame never drops a
@@ -70,9 +70,10 @@ macro_rules! techniques {
             pub const ALL: &'static [Technique] = &[$(Technique::$variant),*];
 
             /// Whether the technique draws transparent materials (the transparent pass of
-            /// `transparent.rs`); the others refuse scenes that have them.
+            /// `transparent.rs`); the tiled techniques refuse scenes that have them (their lists
+            /// live in workgroup memory during one dispatch: nothing is left for a later pass).
             pub fn draws_transparency(self) -> bool {
-                matches!(self, Self::Deferred | Self::ClusteredNaive | Self::ClusteredBvh)
+                !matches!(self, Self::Tiled | Self::Tiled25d)
             }
 
             /// The command-line name.

@@ -36,6 +36,14 @@ pub fn grown_capacity(need: u32) -> u32 {
     need.saturating_add(need / 4)
 }
 
+/// What grew after a frame, of two buffers' growths (`"a, b"` when both grew).
+pub fn grew_together(a: Option<String>, b: Option<String>) -> Option<String> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(format!("{a}, {b}")),
+        (a, b) => a.or(b),
+    }
+}
+
 /// Everything a technique can read: the frame's parameters and the GPU buffers the frame loop
 /// uploads and allocates once per render.
 pub struct FrameInputs<'a> {

@@ -6,8 +6,10 @@
 //!
 //! Steps (`shaders::raster_transparent` has the kernels' side and why the clusters are marked by
 //! a raster pre-pass):
-//! 1. **cluster pre-pass** (clustered techniques): [`Transparency::record_clusters`] twice, inside
-//!    the page-table steps: the transparent draws mark their clusters' pages, then their slots;
+//! 1. **cluster pre-pass** (all but `deferred`): [`Transparency::record_clusters`]; the
+//!    transparent draws mark their clusters' pages, then their slots, inside the page-table steps
+//!    (`clustered-naive`, `clustered-bvh`), their dense clusters' flags (`clustered-aabb`), or
+//!    their tiles' depth ranges before the culling (`forward-plus`);
 //! 2. **transparent pass** ([`Transparency::record_shade`], after the opaque shading): raster
 //!    over the opaque depth (GREATER, no writes, no blending, early fragment tests), each
 //!    fragment shaded over its cluster's list (`deferred`: every light) and inserted into its
@@ -101,7 +103,7 @@ pub fn refusal(t: Technique, transparent: &[Draw], names: &[String], materials: 
         })
         .collect();
     format!(
-        "{} has no transparent pass and would draw the scene's transparent materials opaque: {}; use deferred, clustered-naive or clustered-bvh",
+        "{} has no transparent pass and would draw the scene's transparent materials opaque: {}; use deferred, clustered-naive, clustered-bvh, clustered-aabb or forward-plus",
         t.name(),
         listed.join(", ")
     )
@@ -122,7 +124,9 @@ pub struct TransparencyStats {
     pub node_bytes: u64,
 }
 
-/// The cluster data a transparent fragment reads (the clustered techniques' buffers).
+/// The light lists a transparent fragment reads, as `shaders::raster_transparent::fragment_list`
+/// names them (the page table's buffers; the other techniques bind theirs in some of these
+/// places and any buffer in the others: [`ClusterInputs::dense_grid`], [`ClusterInputs::tiles`]).
 pub struct ClusterInputs<'a> {
     pub page_base: &'a Buffer,
     pub slot_rank: &'a Buffer,
@@ -131,6 +135,33 @@ pub struct ClusterInputs<'a> {
     pub counts: &'a Buffer,
     pub offsets: &'a Buffer,
     pub list: &'a Buffer,
+}
+
+impl<'a> ClusterInputs<'a> {
+    /// `clustered-aabb`: the clusters' flags, counts, offsets and the index list.
+    pub fn dense_grid(flags: &'a Buffer, counts: &'a Buffer, offsets: &'a Buffer, list: &'a Buffer) -> Self {
+        Self { page_base: flags, slot_rank: flags, unique: flags, counters: flags, counts, offsets, list }
+    }
+
+    /// `forward-plus`: its counters, the tiles' ranges or heads, and the indices or nodes.
+    pub fn tiles(counters: &'a Buffer, tiles: &'a Buffer, entries: &'a Buffer) -> Self {
+        Self { page_base: counters, slot_rank: counters, unique: counters, counters, counts: tiles, offsets: tiles, list: entries }
+    }
+}
+
+/// What the cluster pre-pass marks (`TransparentDraw::lists`'s step, the buffer it marks) and,
+/// for the page table's steps, the page bases and slots it reads and sets.
+pub struct Marks<'a> {
+    pub stage: u32,
+    pub marks: &'a Buffer,
+    pub page_table: Option<(&'a Buffer, &'a Buffer)>,
+}
+
+/// The opaque depth the transparent draws test against, and the use it is in.
+#[derive(Clone, Copy)]
+pub struct OpaqueDepth<'a> {
+    pub image: &'a Image,
+    pub from: ImageUse,
 }
 
 /// Where the transparent fragments go (one per technique: the variants' sizes do not matter).
@@ -153,11 +184,17 @@ struct WeightedStore {
 /// The transparent pass of one technique (module docs).
 pub struct Transparency {
     variant: OitVariant,
+    /// `TransparentDraw::lists` of the transparent pass (the technique's lists).
+    lists: u32,
     keys: Option<GraphicsPipeline<TransparentParams>>,
     shade: [GraphicsPipeline<TransparentParams>; 3],
     resolve: ComputePipeline<OitParams>,
     store: Store,
     counters: Buffer,
+    /// Bound where the pre-pass of a technique without a page table has no slots (a buffer of
+    /// its own: the shader may write there, and another buffer read by the same draws would be a
+    /// hazard between them).
+    spare: Buffer,
     /// Each transparent draw's first primitive id (its triangles numbered in draw order).
     first_primitives: Vec<u32>,
     last: TransparencyStats,
@@ -165,9 +202,11 @@ pub struct Transparency {
 
 impl Transparency {
     /// The pass for a frame whose scene has transparent draws (`None` otherwise: nothing is
-    /// allocated or created). `all_lights`: every fragment sums every light (the brute-force
-    /// reference) instead of its cluster's list.
-    pub fn new(f: &FrameInputs<'_>, ctx: &crate::vk::Context, all_lights: bool) -> Result<Option<Self>> {
+    /// allocated or created), over the technique's `lists` (`TRANSPARENT_MARK_PAGES` …
+    /// `TRANSPARENT_TILE_LINKED`); `None`: every fragment sums every light (the brute-force
+    /// reference).
+    pub fn new(f: &FrameInputs<'_>, ctx: &crate::vk::Context, lists: Option<u32>) -> Result<Option<Self>> {
+        let all_lights = lists.is_none();
         let draws = &f.geometry.transparent;
         if draws.is_empty() {
             return Ok(None);
@@ -206,11 +245,13 @@ impl Transparency {
         }
         Ok(Some(Self {
             variant: f.settings.oit,
+            lists: lists.unwrap_or(TRANSPARENT_MARK_PAGES),
             keys,
             shade,
             resolve,
             store,
             counters: Buffer::storage(ctx, "oit counters", 4 * OIT_COUNTERS as u64)?,
+            spare: Buffer::storage(ctx, "oit spare", 4)?,
             first_primitives,
             last: TransparencyStats::default(),
         }))
@@ -230,7 +271,7 @@ impl Transparency {
         }
     }
 
-    fn push(&self, f: &FrameInputs<'_>, frame: &FrameParams, i: usize, stage: u32) -> TransparentParams {
+    fn push(&self, f: &FrameInputs<'_>, frame: &FrameParams, i: usize, lists: u32) -> TransparentParams {
         let d = &f.geometry.transparent[i];
         TransparentParams {
             frame: *frame,
@@ -240,18 +281,17 @@ impl Transparency {
                 normal_precision: d.params.normal_precision,
                 first_primitive: self.first_primitives[i],
                 capacity: self.capacity(),
-                stage,
+                lists,
             },
         }
     }
 
-    /// Draws every transparent draw over the opaque depth (in use `from`, left as a depth
-    /// target) into `colours` with `extra` storage buffers after the vertex stage's: the cluster
-    /// pre-pass at `keys` = `Some(stage)`, else the transparent pass of the draw's variant with
-    /// its textures.
+    /// Draws every transparent draw over the opaque `depth` (left as a depth target) into
+    /// `colours` with `extra` storage buffers after the vertex stage's: the cluster pre-pass at
+    /// `keys` = `Some(stage)`, else the transparent pass of the draw's variant with its textures.
     #[allow(clippy::too_many_arguments)]
-    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, colours: &[Attachment<'_>], extra: &[&Buffer], keys: Option<u32>) -> VkResult<()> {
-        let depth = &f.targets.depth;
+    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, depth: OpaqueDepth<'_>, colours: &[Attachment<'_>], extra: &[&Buffer], keys: Option<u32>) -> VkResult<()> {
+        let (depth, from) = (depth.image, depth.from);
         rec.transition(depth, from, ImageUse::DepthTarget);
         rec.fragments_read_earlier_writes();
         rec.begin_rendering(colours, Attachment { image: depth, load: Load::Keep }, &f.geometry.indices);
@@ -261,24 +301,26 @@ impl Transparency {
                 _ => (&self.shade[d.variant()], d.variant()),
             };
             let bindings = f.draw_bindings(extra, d, textures);
-            rec.draw_indexed(pipe, &bindings, &self.push(f, frame, i, keys.unwrap_or(0)), d.first_index, d.index_count)?;
+            rec.draw_indexed(pipe, &bindings, &self.push(f, frame, i, keys.unwrap_or(self.lists)), d.first_index, d.index_count)?;
         }
         rec.end_rendering();
         rec.kernels_read_fragment_writes();
         Ok(())
     }
 
-    /// Step 1, `stage` `TRANSPARENT_MARK_PAGES` (after the key kernel, before the page scan) or
-    /// `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slot scan). The opaque depth is
-    /// in use `from` (the G-buffer leaves it a copy source).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_clusters(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, stage: u32, marks: &Buffer, page_base: &Buffer, slots: &Buffer) -> VkResult<()> {
-        self.draw_all(rec, f, frame, from, &[], &[f.bounds, marks, page_base, slots], Some(stage))
+    /// Step 1: the page table's `TRANSPARENT_MARK_PAGES` (after the key kernel, before the page
+    /// scan) and `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slot scan); the dense
+    /// grid's flags (after `aabb_mark`, before the compaction); the tiles' depth ranges (after
+    /// Forward+'s depth pre-pass, before the culling). The G-buffer leaves its depth a copy
+    /// source.
+    pub fn record_clusters(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, depth: OpaqueDepth<'_>, m: &Marks<'_>) -> VkResult<()> {
+        let (page_base, slots) = m.page_table.unwrap_or((f.bounds, &self.spare));
+        self.draw_all(rec, f, frame, depth, &[], &[f.bounds, m.marks, page_base, slots], Some(m.stage))
     }
 
     /// Steps 2 and 3, after the opaque shading: the transparent pass and the resolve into the
     /// frame. `clusters`: the lists each fragment reads (`None` with `all_lights`).
-    pub fn record_shade(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, from: ImageUse, clusters: Option<&ClusterInputs<'_>>) -> VkResult<()> {
+    pub fn record_shade(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, depth: OpaqueDepth<'_>, clusters: Option<&ClusterInputs<'_>>) -> VkResult<()> {
         rec.pass("transparent", |rec| {
             rec.fill(&self.counters, 0);
             // The brute-force variant reads no cluster data: any buffer fills those bindings.
@@ -288,7 +330,7 @@ impl Transparency {
             match &self.store {
                 Store::Lists { heads, nodes, .. } => {
                     extra.extend([heads, nodes, &self.counters]);
-                    self.draw_all(rec, f, frame, from, &[], &extra, None)
+                    self.draw_all(rec, f, frame, depth, &[], &extra, None)
                 }
                 Store::Weighted(w) => {
                     let WeightedStore { accum, revealage, accum_buf, revealage_buf } = &**w;
@@ -299,7 +341,7 @@ impl Transparency {
                         Attachment { image: accum, load: Load::ClearF32([0.0; 4]) },
                         Attachment { image: revealage, load: Load::ClearF32([1.0; 4]) },
                     ];
-                    self.draw_all(rec, f, frame, from, &targets, &extra, None)?;
+                    self.draw_all(rec, f, frame, depth, &targets, &extra, None)?;
                     rec.transition(accum, ImageUse::ColourTarget, ImageUse::CopySource);
                     rec.transition(revealage, ImageUse::ColourTarget, ImageUse::CopySource);
                     rec.copy_to_buffers(&[(accum, accum_buf), (revealage, revealage_buf)]);
@@ -342,6 +384,11 @@ impl Transparency {
         Ok(Some(format!("oit nodes to {grown} fragments")))
     }
 
+    /// [`Self::grow_if_needed`] of a technique's optional pass.
+    pub fn grow(pass: Option<&mut Self>, ctx: &crate::vk::Context) -> Result<Option<String>> {
+        pass.map_or(Ok(None), |t| t.grow_if_needed(ctx))
+    }
+
     pub fn stats(&self) -> TransparencyStats {
         self.last
     }
@@ -352,7 +399,7 @@ impl Transparency {
             Store::Lists { heads, nodes, .. } => [heads, nodes].iter().map(|b| (b.name.clone(), b.size)).collect(),
             Store::Weighted(w) => [&w.accum_buf, &w.revealage_buf].iter().map(|b| (b.name.clone(), 2 * b.size)).collect(),
         };
-        v.push((self.counters.name.clone(), self.counters.size));
+        v.extend([&self.counters, &self.spare].map(|b| (b.name.clone(), b.size)));
         v
     }
 }
