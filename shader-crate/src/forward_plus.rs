@@ -132,16 +132,17 @@ pub fn cull_tile<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, H: Atomi
     pushed
 }
 
-/// Declares a culling entry (one workgroup of 256 per tile, `(wg.x, wg.y)` = tile) over
-/// `$cull`'s bindings 0–4, and its `_widened` twin: binding 5 holds the transparent fragments'
-/// depth range per tile (`TILE_DEPTH_WORDS`), which the tile's bounds then span (scenes with
-/// transparent draws; the plain entry reads no such buffer).
-macro_rules! cull_entries {
-    ($plain:ident, $widened:ident, $shared:expr, |$c:ident, $shared_arg:ident, $p:ident, $wg:ident, $local:ident, $depth:ident, $lights:ident, $counters:ident, $tiles:ident, $entries:ident, $widen:ident| $body:block) => {
-        #[doc = concat!("Step 2: [`", stringify!($plain), "`]'s culling, bounds from the opaque depth only.")]
+/// Declares one culling entry (one workgroup of 256 per tile, `(wg.x, wg.y)` = tile) over
+/// bindings 0–4 and the `$extra` ones, with `$widen` bound to `$widen_expr` for `$body`.
+macro_rules! cull_entry {
+    (
+        $entry:ident, $doc:expr, $shared:expr, [$($extra:tt)*], $widen:ident = $widen_expr:expr,
+        |$c:ident, $shared_arg:ident, $p:ident, $wg:ident, $local:ident, $depth:ident, $lights:ident, $counters:ident, $tiles:ident, $entries:ident| $body:block
+    ) => {
+        #[doc = $doc]
         #[spirv(compute(threads(256)))]
         #[allow(clippy::too_many_arguments)]
-        pub fn $plain(
+        pub fn $entry(
             #[spirv(workgroup_id)] $wg: UVec3,
             #[spirv(local_invocation_index)] $local: u32,
             #[spirv(subgroup_size)] subgroup_size: u32,
@@ -155,35 +156,30 @@ macro_rules! cull_entries {
             #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] $counters: &mut [u32],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] $tiles: &mut [u32],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] $entries: &mut [u32],
+            $($extra)*
         ) {
             let $c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index: $local };
-            let $widen = NO_WIDENING;
+            let $widen = $widen_expr;
             $body
         }
+    };
+}
 
-        #[doc = concat!("Step 2: [`", stringify!($plain), "`]'s culling, bounds widened to the tile's transparent fragments.")]
-        #[spirv(compute(threads(256)))]
-        #[allow(clippy::too_many_arguments)]
-        pub fn $widened(
-            #[spirv(workgroup_id)] $wg: UVec3,
-            #[spirv(local_invocation_index)] $local: u32,
-            #[spirv(subgroup_size)] subgroup_size: u32,
-            #[spirv(subgroup_local_invocation_id)] lane: u32,
-            #[spirv(subgroup_id)] subgroup_id: u32,
-            #[spirv(num_subgroups)] num_subgroups: u32,
-            #[spirv(push_constant)] $p: &TiledParams,
-            #[spirv(workgroup)] $shared_arg: &mut [u32; $shared],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] $depth: &[f32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] $lights: &[PointLight],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] $counters: &mut [u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] $tiles: &mut [u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] $entries: &mut [u32],
-            #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] tile_depths: &[u32],
-        ) {
-            let $c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index: $local };
-            let $widen = tile_widening(tile_depths, $wg.y * $p.frame.grid.tiles_x + $wg.x);
-            $body
-        }
+/// Declares a culling entry over `$body` and its `_widened` twin: binding 5 holds the transparent
+/// fragments' depth range per tile (`TILE_DEPTH_WORDS`), which the tile's bounds then span
+/// (scenes with transparent draws; the plain entry reads no such buffer).
+macro_rules! cull_entries {
+    ($plain:ident, $widened:ident, $shared:expr, |$c:ident, $s:ident, $p:ident, $wg:ident, $local:ident, $depth:ident, $lights:ident, $counters:ident, $tiles:ident, $entries:ident, $widen:ident| $body:block) => {
+        cull_entry!(
+            $plain, concat!("Step 2: `", stringify!($plain), "`, bounds from the opaque depth only."), $shared, [], $widen = NO_WIDENING,
+            |$c, $s, $p, $wg, $local, $depth, $lights, $counters, $tiles, $entries| $body
+        );
+        cull_entry!(
+            $widened, concat!("Step 2: `", stringify!($plain), "` with bounds widened to the tile's transparent fragments."), $shared,
+            [#[spirv(storage_buffer, descriptor_set = 0, binding = 5)] tile_depths: &[u32],],
+            $widen = tile_widening(tile_depths, $wg.y * $p.frame.grid.tiles_x + $wg.x),
+            |$c, $s, $p, $wg, $local, $depth, $lights, $counters, $tiles, $entries| $body
+        );
     };
 }
 
