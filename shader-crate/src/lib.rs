@@ -116,6 +116,7 @@ pub mod raster_transparent;
 pub mod reconstruct;
 pub mod scan;
 pub mod shading;
+pub mod spot;
 #[cfg(test)]
 mod sort_acceptance_tests;
 #[cfg(not(target_arch = "spirv"))]

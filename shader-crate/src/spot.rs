@@ -1,0 +1,108 @@
+//! Spot lights: the cone's falloff and the cone tests that cull spot lights by their true shape.
+//!
+//! A spot light is a point light (`PointLight`: apex, range, colour) restricted to a cone about
+//! its direction `d`: a point `p` at unit direction `l = (p − apex)/|p − apex|` receives the point
+//! light's contribution times [`cone_falloff`] of `cos θ = l·d`, the glTF `KHR_lights_punctual`
+//! rule: `saturate((cos θ − cos θ_outer) / (cos θ_inner − cos θ_outer))²`, exactly 0 outside the
+//! outer cone. `θ_outer ≤ 90°` (glTF's limit: the lit set is convex).
+//!
+//! # Culling a cone (Wronski 2017, "Cull that cone!")
+//!
+//! The lit set is the sphere of the range cut by the cone. A bounding sphere `(c, r)` (a
+//! cluster's box's, or a tile's) can meet it only if
+//! 1. it meets the range sphere (the point light's test, done by the caller), and
+//! 2. it meets the cone: with `v = c − apex`, `v₁ = v·d` (the distance along the axis) and
+//!    `v₂ = |v − v₁·d|` (from the axis), the signed distance from `c` to the cone's surface is
+//!    `v₂·cos θ − v₁·sin θ`; the sphere misses the cone when that exceeds `r` (it lies outside
+//!    the lateral surface), or when `v₁ < −r` (entirely behind the apex's plane), or when
+//!    `v₁ > r + range` (beyond the range along the axis) — [`cone_meets_sphere`].
+//!
+//! The distance to the surface is exact for the infinite cone with `θ ≤ 90°` when the closest
+//! point lies on the lateral surface, and the apex region is covered by the `v₁ < −r` test being
+//! checked only against the apex's plane, so the test never rejects a sphere that meets the lit
+//! set: it is conservative (the tests sample points in each sphere to show it). It is not exact
+//! (a sphere near the apex, behind the lateral surface, is kept), which costs list entries, not
+//! light. Both comparisons carry a relative slack of [`CONE_TEST_SLACK`] of the magnitudes
+//! involved so that rounding never culls a light that reaches a point of the sphere.
+//!
+//! Cost per light–cluster pair: 2 dot products, a square root, 3 comparisons. Memory: none; the
+//! light's direction and cone cosines come with it.
+//!
+//! Status: the model and the tests, CPU-tested; lights are still points in every technique (the
+//! light layout has no type yet), so nothing calls these on the GPU.
+use glam::Vec3;
+#[cfg(target_arch = "spirv")]
+use spirv_std::num_traits::Float;
+
+/// Relative slack of the cone tests (module docs).
+pub const CONE_TEST_SLACK: f32 = 1.0 / 65_536.0;
+
+/// A spot light's cone: unit axis, cosines of the inner and outer half-angles and the sine of
+/// the outer one (`0 ≤ θ_inner ≤ θ_outer ≤ 90°`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    pub direction: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+    pub sin_outer: f32,
+}
+
+impl Cone {
+    /// The cone of half-angles `inner ≤ outer` (radians) about `direction` (unit).
+    #[inline]
+    pub fn new(direction: Vec3, inner: f32, outer: f32) -> Self {
+        Self { direction, cos_inner: inner.cos(), cos_outer: outer.cos(), sin_outer: outer.sin() }
+    }
+}
+
+/// The glTF spot falloff at `cos θ` (module docs): 1 inside the inner cone, 0 outside the outer
+/// one, the square of a linear ramp between; a hard edge where the two cones coincide.
+#[inline]
+pub fn cone_falloff(cos_theta: f32, cone: &Cone) -> f32 {
+    if !(cos_theta > cone.cos_outer) {
+        return 0.0;
+    }
+    let span = cone.cos_inner - cone.cos_outer;
+    let t = if span > 0.0 { (cos_theta - cone.cos_outer) / span } else { 1.0 };
+    let t = if t < 1.0 { t } else { 1.0 };
+    t * t
+}
+
+/// The falloff of a spot light with apex `apex` at point `p` ([`cone_falloff`] of the angle to
+/// the axis; 1 at the apex itself, where the direction is undefined and the range test decides).
+#[inline]
+pub fn spot_factor(apex: Vec3, cone: &Cone, p: Vec3) -> f32 {
+    let l = p - apex;
+    let len = l.length();
+    if !(len > 0.0) {
+        return 1.0;
+    }
+    cone_falloff(l.dot(cone.direction) / len, cone)
+}
+
+/// Whether the sphere `(c, r)` may meet the cone of apex `apex` cut at `range` (module docs):
+/// `false` only if no point of the sphere is lit. Conservative; NaN gives `true`.
+#[inline]
+pub fn cone_meets_sphere(apex: Vec3, cone: &Cone, range: f32, c: Vec3, r: f32) -> bool {
+    let v = c - apex;
+    let v1 = v.dot(cone.direction);
+    let axial2 = v.length_squared() - v1 * v1;
+    let v2 = if axial2 > 0.0 { axial2.sqrt() } else { 0.0 };
+    let scale = v.length() + r + range;
+    let slack = scale * CONE_TEST_SLACK;
+    let outside = v2 * cone.cos_outer - v1 * cone.sin_outer > r + slack;
+    let behind = v1 < -r - slack;
+    let beyond = v1 > r + range + slack;
+    !(outside || behind || beyond)
+}
+
+/// [`cone_meets_sphere`] for the box `[min, max]`, through its bounding sphere.
+#[inline]
+pub fn cone_meets_box(apex: Vec3, cone: &Cone, range: f32, min: Vec3, max: Vec3) -> bool {
+    let c = (min + max) * 0.5;
+    cone_meets_sphere(apex, cone, range, c, (max - min).length() * 0.5)
+}
+
+#[cfg(test)]
+#[path = "spot_tests.rs"]
+mod tests;
