@@ -114,21 +114,21 @@ impl OverlayText {
     }
 }
 
-/// The frame-time graph: one bar per frame, scaled to the slowest shown.
+/// The frame-time graph: one bar per frame, scaled to the slowest shown (named above it).
 fn graph(ui: &mut egui::Ui, frames: &[f64]) {
     if frames.is_empty() {
         return;
     }
+    let top = frames.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
+    ui.label(egui::RichText::new(format!("GPU frame, last {} frames (top {top:.2} ms)", frames.len())).monospace().size(9.0).color(egui::Color32::from_gray(200)));
     let (rect, _) = ui.allocate_exact_size(egui::vec2(WINDOW as f32 * 2.0, 40.0), egui::Sense::hover());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 0.0, egui::Color32::from_black_alpha(120));
-    let top = frames.iter().copied().fold(f64::MIN_POSITIVE, f64::max);
     for (i, &ms) in frames.iter().enumerate() {
         let h = (ms / top) as f32 * rect.height();
-        let x = rect.left() + 2.0 * i as f32;
+        let x = rect.left() + 2.0 * i as f32 + 1.0;
         painter.line_segment([egui::pos2(x, rect.bottom()), egui::pos2(x, rect.bottom() - h)], egui::Stroke::new(1.5, egui::Color32::from_rgb(120, 200, 120)));
     }
-    painter.text(rect.left_top() + egui::vec2(2.0, 1.0), egui::Align2::LEFT_TOP, format!("{top:.2} ms"), egui::FontId::monospace(9.0), egui::Color32::from_gray(200));
 }
 
 #[cfg(test)]
