@@ -66,7 +66,7 @@ pub fn run(dev: &DeviceArgs, a: &ViewArgs) -> Result<()> {
             crate::args::check_output_dir("--script shot", p)?;
         }
     }
-    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window: {e}"))?;
+    let event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window: {}", window_system_error(&e.to_string())))?;
     let display = event_loop.display_handle().map_err(|e| anyhow!("cannot open a window: {e}"))?.as_raw();
     let gpu = crate::cli::open_for_display(dev, display)?;
     let viewer = Viewer::new(&gpu, &a.render)?;
@@ -97,6 +97,18 @@ pub fn run(dev: &DeviceArgs, a: &ViewArgs) -> Result<()> {
         return Err(e);
     }
     crate::cli::finish(&gpu)
+}
+
+/// What the window system said, without the source location winit puts before it; with no
+/// display at all, what to do.
+fn window_system_error(text: &str) -> String {
+    if std::env::var("DISPLAY").map_or(true, |d| d.is_empty()) {
+        return "no X11 display (DISPLAY is not set): run it in a desktop session, or under a virtual display (xvfb-run)".into();
+    }
+    match text.find(".rs:").and_then(|i| text[i..].find(": ").map(|j| i + j + 2)) {
+        Some(start) => text[start..].to_string(),
+        None => text.to_string(),
+    }
 }
 
 /// The window and everything that draws into it. Fields drop in order: the overlay and the
