@@ -262,6 +262,8 @@ impl App {
             (None, None) => 0.0,
         };
         self.last = Some(now);
+        // The renderer first: the actions change it (and are refused where it cannot take them).
+        self.viewer.ensure_size(&self.gpu, extent.0, extent.1)?;
         let (look, actions) = self.input.take();
         for action in actions {
             match action {
@@ -288,7 +290,6 @@ impl App {
             }
         }
         self.viewer.advance(&self.input, look, dt);
-        self.viewer.ensure_size(&self.gpu, extent.0, extent.1)?;
         self.viewer.render(&self.gpu)?;
         let lines = self.show_overlay.then(|| self.overlay_lines());
         let overlay = match (lines, self.overlay.as_mut()) {
