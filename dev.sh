@@ -3,17 +3,21 @@
 #
 #   ./dev.sh render [manylights render flags]   build (release) and render a frame
 #   ./dev.sh test                               the whole test suite (what CI runs)
+#   ./dev.sh view [manylights view flags]       build (release) and open the interactive viewer
 #   ./dev.sh <any manylights subcommand>        e.g. ./dev.sh check, ./dev.sh devices
 #
 # Needs: rustup (stable toolchain). Installs through apt when it can (root or passwordless sudo):
-# the Vulkan loader, Mesa's CPU driver lavapipe, the Khronos validation layers, spirv-tools.
+# the Vulkan loader, Mesa's CPU driver lavapipe, the Khronos validation layers, spirv-tools, the
+# X11 libraries the viewer's window loads at run time, and Xvfb (the viewer's test runs a real
+# window on a virtual X server).
 # The first build also installs the pinned nightly rust-gpu needs and compiles its backend once,
 # against the spirv-tools installed here (cached in ~/.cache/rust-gpu). A cold `./dev.sh devices`
 # took 878 CPU-seconds on 2 cores this way, 1478 when SPIRV-Tools is compiled too (README).
 set -euo pipefail
 cd "$(dirname "$0")"
 
-PACKAGES=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers spirv-tools vulkan-tools)
+PACKAGES=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers spirv-tools vulkan-tools
+          libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xvfb xauth)
 
 die() { echo "dev.sh: $*" >&2; exit 1; }
 

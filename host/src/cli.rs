@@ -44,6 +44,9 @@ pub enum Command {
     Check,
     /// List Vulkan devices and whether manylights can use them.
     Devices,
+    /// Open a window and fly through a scene: every frame rendered with the passes of `render`;
+    /// keys switch technique, view and light count (README, "Viewer").
+    View(crate::viewer::ViewArgs),
 }
 
 #[derive(Args, Debug)]
@@ -59,7 +62,21 @@ pub struct DebugFrameArgs {
 }
 
 fn open(dev: &DeviceArgs) -> Result<Gpu> {
-    let gpu = Gpu::new(&ContextOptions { validation: dev.validation, device: dev.device.clone() }).map_err(|e| {
+    open_with(dev, None)
+}
+
+/// Opens the device for presenting to windows of `display` (the viewer).
+pub(crate) fn open_for_display(dev: &DeviceArgs, display: raw_window_handle::RawDisplayHandle) -> Result<Gpu> {
+    open_with(dev, Some(display))
+}
+
+fn open_with(dev: &DeviceArgs, display: Option<raw_window_handle::RawDisplayHandle>) -> Result<Gpu> {
+    let opts = ContextOptions { validation: dev.validation, device: dev.device.clone() };
+    let gpu = match display {
+        Some(d) => Gpu::for_display(&opts, d),
+        None => Gpu::new(&opts),
+    }
+    .map_err(|e| {
         // A `--device` that names no device is the user's input; no usable device at all is not.
         let named = dev.device.is_some() && matches!(e, vk::VkError::NoMatchingDevice { .. });
         let e = anyhow::Error::new(e).context("opening the Vulkan device");
@@ -74,7 +91,7 @@ fn open(dev: &DeviceArgs) -> Result<Gpu> {
 }
 
 /// Fails when validation reported anything.
-fn finish(gpu: &Gpu) -> Result<()> {
+pub(crate) fn finish(gpu: &Gpu) -> Result<()> {
     let msgs = gpu.ctx.take_validation_messages();
     if !msgs.is_empty() {
         for m in &msgs {
@@ -120,6 +137,7 @@ pub fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {}", f.out.display());
             finish(&gpu)
         }
+        Command::View(a) => crate::viewer::run(&cli.device, &a),
         Command::Check => {
             let gpu = open(&cli.device)?;
             let reports = crate::parity::run_all(&gpu)?;

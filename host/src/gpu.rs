@@ -173,7 +173,15 @@ pub struct Gpu {
 
 impl Gpu {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
-        let ctx = Context::new(opts)?;
+        Self::with_context(Context::new(opts)?)
+    }
+
+    /// A GPU that can also present to windows of `display` (the viewer).
+    pub fn for_display(opts: &ContextOptions, display: raw_window_handle::RawDisplayHandle) -> VkResult<Self> {
+        Self::with_context(Context::for_display(opts, display)?)
+    }
+
+    fn with_context(ctx: Context) -> VkResult<Self> {
         let made = Kernels::new(&ctx).and_then(|k| Ok((k, RasterPipelines::new(&ctx)?)));
         match made {
             Ok((kernels, raster)) => Ok(Self { kernels, raster, ctx }),

@@ -1,5 +1,5 @@
 //! manylights host: the Vulkan backend (`vk`), the kernels as the algorithms see them (`gpu`),
-//! GPU-vs-CPU parity checks (`parity`), debug frames and the CLI.
+//! GPU-vs-CPU parity checks (`parity`), debug frames, the interactive viewer (`viewer`) and the CLI.
 pub mod args;
 pub mod bad_input;
 pub mod bench;
@@ -11,4 +11,5 @@ pub mod preflight;
 pub mod render;
 pub mod render_cmd;
 pub mod scene;
+pub mod viewer;
 pub mod vk;

@@ -72,6 +72,10 @@ pub struct RenderArgs {
     /// order-independent average of the rest, or `weighted` blended OIT (no lists, no sorting).
     #[arg(long, value_enum, default_value_t = crate::render::transparent::OitVariant::K4)]
     pub oit: crate::render::transparent::OitVariant,
+    /// Camera bookmark `x,y,z,yaw,pitch[,fov]` (degrees; the viewer's `C` key prints it): replaces
+    /// the scene's camera position and direction.
+    #[arg(long, value_parser = crate::scene::bookmark::parse_arg, allow_hyphen_values = true)]
+    pub camera: Option<crate::scene::bookmark::Bookmark>,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -134,6 +138,9 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let mut scene = Scene::load(&a.scene, &a.assets)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
+    }
+    if let Some(b) = &a.camera {
+        scene.camera = b.apply(&scene.camera);
     }
     if scene.lights.is_empty() {
         if a.lights == 0 {

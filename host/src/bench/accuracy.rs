@@ -30,7 +30,7 @@ use crate::gpu::Gpu;
 use crate::render::transparent::OitVariant;
 use crate::render::{self, Frame, Settings, Technique};
 use crate::scene::flatten::{flatten, scene_input};
-use crate::scene::{lights, Scene};
+use crate::scene::lights;
 use anyhow::{Context as _, Result};
 use plotters::prelude::*;
 use shaders::layout::*;
@@ -168,7 +168,7 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let mut rows = Vec::new();
     let bar = indicatif::ProgressBar::new((a.scenes.len() * 16) as u64);
     for name in &a.scenes {
-        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        let scene = super::load_scene(name, a)?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
         let flat = flatten(&scene, Precision::Oct16)?;
         let run = |ls: &[shaders::layout::PointLight], effects: u32, s: &Settings| -> Result<Frame> {

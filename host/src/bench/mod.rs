@@ -94,6 +94,20 @@ pub struct BenchArgs {
     /// transparent layers: brute force would shade every light for every transparent fragment).
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = accuracy::Knob::ALL)]
     pub knobs: Vec<accuracy::Knob>,
+    /// Camera bookmark `x,y,z,yaw,pitch[,fov]` (degrees; `render --camera`, the viewer's `C`
+    /// key) for every scene of the sweep, instead of each scene's own camera.
+    #[arg(long, value_parser = crate::scene::bookmark::parse_arg, allow_hyphen_values = true)]
+    pub camera: Option<crate::scene::bookmark::Bookmark>,
+}
+
+/// Loads scene `name` of the sweep, with `--camera` where given.
+pub fn load_scene(name: &str, a: &BenchArgs) -> Result<Scene> {
+    let mut scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+    if let Some(b) = &a.camera {
+        scene.camera = b.apply(&scene.camera);
+        scene.camera.validate().with_context(|| format!("scene {name:?} with --camera {b}")).map_err(crate::bad_input::bad_input)?;
+    }
+    Ok(scene)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -311,7 +325,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
     // count for 10 s, unrecorded (not on lavapipe, whose times are not quoted anyway).
     let warm_up_seconds = if cpu_driver { 0.0 } else { WARM_UP_SECONDS };
     if let (Some(name), Some(&n)) = (a.scenes.first(), a.lights.first()) {
-        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        let scene = load_scene(name, a)?;
         let warm = BenchArgs { frames: a.frames.max(10), ..a.clone() };
         let runnable: Vec<Technique> =
             techniques.iter().copied().filter(|&t| skip_reason(t, n, a.width as u64 * a.height as u64, cpu_driver, scene.has_transparency()).is_none()).collect();
@@ -325,7 +339,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         }
     }
     for name in &a.scenes {
-        let scene = Scene::load(name, &a.assets).with_context(|| format!("loading scene {name:?}"))?;
+        let scene = load_scene(name, a)?;
         for &n in &a.lights {
             for &t in &techniques {
                 bar.set_message(format!("{name} {t:?} {n} lights"));

@@ -48,13 +48,15 @@ impl LightBvh {
             spheres: Buffer::storage(ctx, "sorted light spheres", 16 * n.max(1) as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
             sort: LightSorter::new(gpu, sort, n.max(1))?,
-            quantizers: MortonParams {
-                q30: MortonQuantizer::new(lo, hi, MORTON30_BITS),
-                q63: MortonQuantizer::new(lo, hi, MORTON63_BITS),
-                count: n,
-                _pad: [0; 3],
-            },
+            quantizers: quantizers(lo, hi, n),
         })
+    }
+
+    /// The same lights moved (a new camera, the animation): the Morton quantiser spans their
+    /// new view-space positions.
+    pub fn requantize(&mut self, lights: &[PointLight]) {
+        let (lo, hi) = position_bounds(lights);
+        self.quantizers = quantizers(lo, hi, self.n);
     }
 
     pub fn bytes(&self) -> u64 {
@@ -89,6 +91,10 @@ impl LightBvh {
 }
 
 /// Bounds of the lights' positions, which the Morton quantiser spans (the unit box for none).
+fn quantizers(lo: [f32; 3], hi: [f32; 3], count: u32) -> MortonParams {
+    MortonParams { q30: MortonQuantizer::new(lo, hi, MORTON30_BITS), q63: MortonQuantizer::new(lo, hi, MORTON63_BITS), count, _pad: [0; 3] }
+}
+
 fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
     if lights.is_empty() {
         return ([0.0; 3], [1.0; 3]);

@@ -91,6 +91,12 @@ impl LightingTechnique for Clustered {
         self.bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, f.lights))
     }
 
+    fn lights_moved(&mut self, f: &FrameInputs<'_>) {
+        if let Some(b) = self.bvh.as_mut() {
+            b.requantize(f.lights_view);
+        }
+    }
+
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let p = FrameParams { light_capacity: self.buffers.caps.light_refs, ..f.params };
         self.buffers.record(gpu, rec, &p, f, self.bvh.as_ref(), self.transparency.as_ref())

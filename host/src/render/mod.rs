@@ -5,8 +5,9 @@
 //! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
 //! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`; `transparent.rs`
 //! is the transparent pass every technique but the tiled ones adds for scenes with transparent
-//! materials (`tiled` and `tiled-2.5d` refuse such scenes: [`Technique::draws_transparency`]). The frame loop
-//! ([`render`]) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
+//! materials (`tiled` and `tiled-2.5d` refuse such scenes: [`Technique::draws_transparency`]).
+//! The frame loop ([`render`], a loop over the per-frame [`Renderer`] of `renderer.rs`, which the
+//! viewer drives too) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
 //! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
 //! frames, growth and re-run (at most [`technique::MAX_REGROWTHS`] times; a frame never drops a
 //! light), per-pass medians and the read-back for CPU checks.
@@ -38,6 +39,7 @@ pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
 pub mod reference;
+pub mod renderer;
 pub mod scan;
 pub mod sort;
 pub mod stats;
@@ -46,13 +48,14 @@ pub mod tiled;
 pub mod transparent;
 
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, PassTiming, Profiler, Queue};
-use anyhow::{bail, Context as _, Result};
+use crate::vk::PassTiming;
+use anyhow::Result;
 pub use gbuffer::{Draw, TextureData};
 pub use camera_relative::{lights_to_view, ViewTransform};
-use shaders::cluster_key::{slice_bounds, ClusterGrid};
+pub use renderer::{FrameTimes, Renderer};
+use shaders::cluster_key::ClusterGrid;
 use shaders::layout::*;
-use technique::{FrameInputs, LightingTechnique, MAX_REGROWTHS};
+use technique::{FrameInputs, LightingTechnique};
 use shaders::octahedral::Precision;
 
 /// Declares [`Technique`] (the command line's `--technique` values) and its constructors from one
@@ -230,153 +233,18 @@ pub fn specular_variant(p: &FrameParams) -> usize {
 /// Lights per pixel at the top of the heatmap ramp.
 pub const HEAT_MAX: u32 = 64;
 
-/// Renders one frame (plus `settings.frames` timed repetitions).
+/// Renders one frame (plus `settings.frames` timed repetitions): a loop over
+/// [`Renderer::frame`] (`renderer.rs`), the first frame a warm-up unless it is the only one.
 pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> {
-    let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
-    if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
-        bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
-    }
-    if let Some(d) = scene.draws.iter().find(|d| d.params.normal_precision != s.normal_precision.code()) {
-        bail!(
-            "a draw encodes normals at precision {:?} but the frame reads them at {:?}: flatten the scene at the frame's precision",
-            Precision::from_u32(d.params.normal_precision),
-            s.normal_precision
-        );
-    }
-    if !View::FRAME.contains(&s.view) {
-        bail!("view {:?} is not a view of a rendered frame (one of {:?})", s.view, View::FRAME);
-    }
-    let ctx = &gpu.ctx;
-    let max_lights = shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
-    if ctx.info.is_llvmpipe() && scene.lights.len() > max_lights as usize {
-        bail!(
-            "{} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \
-             can visit at most {max_lights} lights there (use fewer lights or a GPU)",
-            scene.lights.len()
-        );
-    }
-    let n = s.width * s.height;
-    let lights_view = lights_to_view(&scene.view, scene.lights)?;
-    let positions = scene.view.relative_positions(scene.positions);
-    let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, &scene.draws, &scene.materials)
-        .context("uploading geometry")?;
-    if !geometry.transparent.is_empty() && !s.technique.draws_transparency() {
-        bail!("{}", transparent::refusal(s.technique, &geometry.transparent, &scene.material_names, &scene.materials));
-    }
-    let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, s.width as f32 / s.height as f32, scene.near)])?;
-    let mut targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
-    let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
-    let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
-    let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
-    let bounds = slice_bounds(&grid);
-    let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
-    let mut frame_buf = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
-    let params = FrameParams {
-        grid,
-        count: n,
-        num_lights: scene.lights.len() as u32,
-        light_capacity: 0,
-        effects: scene.effects,
-        normal_precision: s.normal_precision.code(),
-        view: s.view.code(),
-        exposure: s.exposure,
-        heat_max: HEAT_MAX,
-    };
-    let mut buffers: Vec<(String, u64)> = vec![
-        ("geometry".into(), geometry.bytes()),
-        ("textures".into(), textures.bytes()),
-        ("gbuffer".into(), targets.bytes()),
-        ("lights".into(), lights.size),
-        ("frame".into(), frame_buf.size),
-    ];
-    let inputs = FrameInputs {
-        params,
-        settings: s,
-        geometry: &geometry,
-        indices: scene.indices,
-        textures: &textures,
-        camera: &camera,
-        targets: &targets,
-        lights: &lights,
-        lights_view: &lights_view,
-        materials: &materials,
-        bounds: &bounds_buf,
-        frame: &frame_buf,
-    };
-    let mut tech = s.technique.create(gpu, &inputs)?;
-    let overlapped = tech.has_async_work() && s.async_compute && ctx.async_compute_queue.is_some();
-    let mut profiler = Profiler::new(ctx, 16)?;
-    let mut async_profiler = Profiler::new_async(ctx, 4)?;
-    let mut timings_all: Vec<Vec<PassTiming>> = Vec::new();
-    let mut frame_samples: Vec<frame_time::FrameSample> = Vec::new();
-    let across_queues = ctx.info.timestamps_across_queues;
-    let (mut f, mut regrowths) = (0, 0);
-    while f <= s.frames {
-        gpu.ctx.run_overlapped(
-            overlapped,
-            Some(&mut profiler),
-            Some(&mut async_profiler),
-            |rec| tech.record_async(gpu, rec, &inputs),
-            |rec| match tech.uses_gbuffer() {
-                true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets)),
-                false => Ok(()),
-            },
-            |rec| tech.record(gpu, rec, &inputs),
-        )?;
-        if let Some(grown) = tech.grow_if_needed(gpu)? {
-            regrowths += 1;
-            if regrowths > MAX_REGROWTHS {
-                bail!("{}: buffers keep growing ({grown}): giving up", s.technique.name());
-            }
-            continue; // re-run this frame
-        }
+    let mut renderer = Renderer::new(gpu, scene, s)?;
+    let mut timed = Vec::new();
+    for f in 0..=s.frames {
+        let times = renderer.frame(gpu)?;
         if f > 0 || s.frames == 0 {
-            let ((mut t, async_span), (main_passes, main_span)) = (async_profiler.results_and_span()?, profiler.results_and_span()?);
-            t.extend(main_passes);
-            let raster_ms = t.iter().filter(|p| p.raster && p.queue == Queue::Main).map(|p| p.ms).sum();
-            frame_samples.extend(frame_time::sample(main_span, async_span, across_queues, raster_ms));
-            timings_all.push(t);
+            timed.push(times);
         }
-        f += 1;
     }
-    let lists = tech.stats()?;
-    let transparency = tech.transparency();
-    buffers.extend(tech.buffers());
-    let cluster_lists = if s.read_back { tech.cluster_lists()? } else { None };
-    let tile_lists = if s.read_back { tech.tile_lists()?.unwrap_or_default() } else { Vec::new() };
-    drop(tech);
-    let pixels: Vec<u32> = frame_buf.read(n as usize)?;
-    let readback = if s.read_back {
-        let depth: Vec<u32> = targets.depth_buf.read(n as usize)?;
-        let precision = s.normal_precision;
-        let words: Vec<u32> = targets.normal_buf.read((precision.gbuffer_words() * n) as usize)?;
-        let normals = words
-            .chunks(precision.gbuffer_words() as usize)
-            .map(|w| shaders::octahedral::decode([w[0], w.get(1).copied().unwrap_or(0), w.get(2).copied().unwrap_or(0)], precision))
-            .collect();
-        let albedo: Vec<u32> = targets.albedo_buf.read(n as usize)?;
-        let c = cluster_lists.unwrap_or(technique::ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
-        Some(Readback { depth, normals, albedo, keys: c.keys, unique: c.unique, counts: c.counts, offsets: c.offsets, list: c.list, lights_view, grid, bounds, tile_lists, transparent: !geometry.transparent.is_empty() })
-    } else {
-        None
-    };
-    let (timings, timing_spread) = median_timings(&timings_all);
-    Ok(Frame {
-        pixels,
-        gpu_frame: frame_time::median(&frame_samples, across_queues),
-        timings,
-        timing_spread,
-        unique_clusters: lists.clusters,
-        light_refs: lists.light_refs,
-        pages: lists.pages,
-        regrowths,
-        max_list: lists.max_list,
-        buffers,
-        readback,
-        grid,
-        overlapped,
-        transparency,
-    })
+    renderer.into_report(&timed, s.read_back)
 }
 
 /// Per-pass median over frames, and the (min, max) beside it (passes matched by position).

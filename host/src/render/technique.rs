@@ -120,6 +120,11 @@ pub trait LightingTechnique {
         Ok(())
     }
 
+    /// Between frames, the same lights moved in view space (the viewer's camera or animation;
+    /// `f.lights_view` holds them): a technique that precomputed something from their positions
+    /// updates it.
+    fn lights_moved(&mut self, _f: &FrameInputs<'_>) {}
+
     /// Records the technique's passes on the main queue (after the G-buffer pass).
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()>;
 

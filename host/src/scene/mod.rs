@@ -25,6 +25,7 @@ use glam::Vec3;
 use shaders::layout::{PointLight, EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
 use std::path::{Path, PathBuf};
 
+pub mod bookmark;
 pub mod description;
 pub mod flatten;
 pub mod gltf;

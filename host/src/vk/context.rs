@@ -49,10 +49,24 @@ impl std::ops::Deref for Context {
 
 impl Context {
     pub fn new(opts: &ContextOptions) -> VkResult<Self> {
-        let instance = Instance::new(opts.validation)?;
+        Self::open(opts, None)
+    }
+
+    /// A context that can present to windows of `display` (its surface extensions on the
+    /// instance, `VK_KHR_swapchain` on the device): the viewer's (`vk::present`).
+    pub fn for_display(opts: &ContextOptions, display: raw_window_handle::RawDisplayHandle) -> VkResult<Self> {
+        Self::open(opts, Some(display))
+    }
+
+    fn open(opts: &ContextOptions, display: Option<raw_window_handle::RawDisplayHandle>) -> VkResult<Self> {
+        let surface_exts = match display {
+            Some(d) => ash_window::enumerate_required_extensions(d).call("the window system's Vulkan surface extensions")?,
+            None => &[],
+        };
+        let instance = Instance::with_extensions(opts.validation, surface_exts)?;
         let (physical, mut info) = device::select(&instance.raw, opts.device.as_deref())?;
         info.timestamps_across_queues = device::device_time_domain(&instance.entry, &instance.raw, physical, &info);
-        let device = device::create(&instance.raw, physical, &info)?;
+        let device = device::create(&instance.raw, physical, &info, display.is_some())?;
         let queue = unsafe { device.get_device_queue(info.graphics_family, 0) };
         let async_compute_queue =
             info.async_compute_family.map(|f| Mutex::new(unsafe { device.get_device_queue(f, 0) }));
@@ -155,12 +169,18 @@ impl Context {
 
     /// Records commands with `record`, submits them to the graphics+compute queue and waits.
     pub fn submit_and_wait<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> VkResult<R>) -> VkResult<R> {
+        self.submit_signalling_and_wait(None, record)
+    }
+
+    /// [`Context::submit_and_wait`] whose submission also signals `signal` (a presentation waits
+    /// for it).
+    pub(crate) fn submit_signalling_and_wait<R>(&self, signal: Option<vk::Semaphore>, record: impl FnOnce(vk::CommandBuffer) -> VkResult<R>) -> VkResult<R> {
         let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
         let cmd = self.begin_commands(*pool)?;
         let result = (|| {
             let r = record(cmd)?;
             unsafe { self.device.end_command_buffer(cmd) }.call("vkEndCommandBuffer")?;
-            self.submit_all_and_wait(&[(&self.queue, cmd, None, None)])?;
+            self.submit_all_and_wait(&[(&self.queue, cmd, None, signal)])?;
             Ok(r)
         })();
         unsafe { self.device.free_command_buffers(*pool, &[cmd]) };

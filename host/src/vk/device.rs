@@ -256,7 +256,8 @@ pub fn select(instance: &ash::Instance, wanted: Option<&str>) -> VkResult<(vk::P
 }
 
 /// Creates the logical device with the features the kernels need; returns it and its queues.
-pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo) -> VkResult<ash::Device> {
+/// With `swapchain`, `VK_KHR_swapchain` is enabled too (a window's presentation).
+pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo, swapchain: bool) -> VkResult<ash::Device> {
     let priorities = [1.0f32];
     let mut queues = vec![vk::DeviceQueueCreateInfo::default()
         .queue_family_index(info.graphics_family)
@@ -276,10 +277,11 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
         .shader_demote_to_helper_invocation(true);
     let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true).fragment_stores_and_atomics(true).geometry_shader(true).independent_blend(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
-    let exts = [khr::push_descriptor::NAME.as_ptr()];
+    let exts = [khr::push_descriptor::NAME.as_ptr(), khr::swapchain::NAME.as_ptr()];
+    let exts = &exts[..1 + usize::from(swapchain)];
     let create = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
-        .enabled_extension_names(&exts)
+        .enabled_extension_names(exts)
         .push_next(&mut f2);
     unsafe { instance.create_device(pd, &create, None) }.call("vkCreateDevice")
 }

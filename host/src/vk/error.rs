@@ -7,6 +7,8 @@ pub enum VkError {
     Loader(#[from] ash::LoadingError),
     #[error("Vulkan call {call} failed: {result}")]
     Call { call: &'static str, result: vk::Result },
+    #[error("the Vulkan device was lost ({call} answered VK_ERROR_DEVICE_LOST: the driver reset or the GPU hung or was removed); nothing can be rendered any more")]
+    DeviceLost { call: &'static str },
     #[error("the Khronos validation layer (VK_LAYER_KHRONOS_validation) is not installed; install it (Debian: `apt-get install vulkan-validationlayers`) or run without validation")]
     NoValidationLayer,
     #[error("no Vulkan device found: install a driver (Debian: `apt-get install mesa-vulkan-drivers` for the CPU driver lavapipe)")]
@@ -25,6 +27,10 @@ pub enum VkError {
     Validation { during: String, messages: String },
     #[error("image {name:?}: {what}")]
     InvalidImage { name: String, what: String },
+    #[error("window: {0}")]
+    Window(String),
+    #[error("overlay: {0}")]
+    Overlay(String),
     #[error("kernel {entry:?}: {what}")]
     Kernel { entry: &'static str, what: String },
 }
@@ -38,6 +44,9 @@ pub(crate) trait CallContext<T> {
 
 impl<T> CallContext<T> for Result<T, vk::Result> {
     fn call(self, call: &'static str) -> VkResult<T> {
-        self.map_err(|result| VkError::Call { call, result })
+        self.map_err(|result| match result {
+            vk::Result::ERROR_DEVICE_LOST => VkError::DeviceLost { call },
+            result => VkError::Call { call, result },
+        })
     }
 }

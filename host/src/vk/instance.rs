@@ -45,6 +45,11 @@ impl Instance {
     /// Creates a Vulkan 1.3 instance. With `validation`, the Khronos layer with synchronization
     /// validation is required (an error says how to install it when absent).
     pub fn new(validation: bool) -> VkResult<Self> {
+        Self::with_extensions(validation, &[])
+    }
+
+    /// [`Instance::new`] with more instance extensions (a window system's surface extensions).
+    pub fn with_extensions(validation: bool, extra: &[*const std::ffi::c_char]) -> VkResult<Self> {
         // SAFETY: loading libvulkan; the returned entry outlives every object made from it.
         let entry = unsafe { ash::Entry::load()? };
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.call("vkEnumerateInstanceLayerProperties")?;
@@ -62,11 +67,12 @@ impl Instance {
             .engine_name(c"manylights")
             .api_version(vk::API_VERSION_1_3);
         let layer_names = [VALIDATION_LAYER.as_ptr()];
-        let ext_names = [ext::debug_utils::NAME.as_ptr()];
+        let debug_name = [ext::debug_utils::NAME.as_ptr()];
         let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
         let mut info = vk::InstanceCreateInfo::default().application_info(&app);
-        if debug_utils {
+        let ext_names: Vec<*const std::ffi::c_char> = debug_name.iter().take(usize::from(debug_utils)).chain(extra).copied().collect();
+        if !ext_names.is_empty() {
             info = info.enabled_extension_names(&ext_names);
         }
         if validation {

@@ -11,6 +11,8 @@
 //! | `profiler.rs` | GPU timestamps per pass |
 //! | `raster.rs` | typed graphics pipelines (dynamic rendering, vertex pulling), target formats |
 //! | `draw.rs` | raster recording: target transitions, rendering, indexed draws, target copies |
+//! | `present.rs` | a window's surface and swapchain, frames copied into it (the viewer) |
+//! | `overlay.rs` | the viewer's egui overlay drawn into swapchain images |
 pub mod context;
 pub mod device;
 pub mod draw;
@@ -18,7 +20,9 @@ pub mod error;
 pub mod image;
 pub mod instance;
 pub mod memory;
+pub mod overlay;
 pub mod pipeline;
+pub mod present;
 pub mod profiler;
 pub mod raster;
 
@@ -28,6 +32,8 @@ pub use error::{VkError, VkResult};
 pub use image::{Image, Sampler};
 pub use memory::{Buffer, MemoryLocation};
 pub use draw::{Attachment, Binding, ImageUse, Load};
+pub use overlay::Overlay;
+pub use present::{PresentMode, Presented, Presenter};
 pub use pipeline::{fold, ComputePipeline, Recorder, ShaderModule, MAX_GROUPS_PER_AXIS};
 pub use profiler::{PassTiming, Profiler, Queue};
 pub use raster::{Blend, DepthTest, GraphicsPipeline, TargetFormat};

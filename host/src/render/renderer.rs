@@ -1,0 +1,423 @@
+//! The per-frame renderer shared by `render` (a loop of warm-up and timed frames) and the
+//! interactive viewer (one frame per displayed frame): it owns what a frame reads — the uploaded
+//! scene, the G-buffer targets, the lights, the output frame — and the lighting technique, and
+//! [`Renderer::frame`] records and runs one frame of every pass (async work, G-buffer, the
+//! technique's passes), growing buffers and re-running the frame when the technique asks.
+//!
+//! Between frames the viewer moves the camera ([`Renderer::set_view`]: vertices and lights are
+//! re-uploaded camera-relative, `camera_relative.rs`), replaces the lights
+//! ([`Renderer::set_lights`]) or changes the technique or the view ([`Renderer::set_settings`]:
+//! the technique is created anew). A new frame size is a new renderer.
+use super::technique::{ClusterLists, FrameInputs, LightingTechnique, ListStats, MAX_REGROWTHS};
+use super::{frame_time, gbuffer, lights_to_view, transparent, Frame, Readback, SceneInput, Settings, ViewTransform, HEAT_MAX};
+use crate::gpu::Gpu;
+use crate::vk::{Buffer, PassTiming, Profiler, Queue};
+use anyhow::{bail, Context as _, Result};
+use shaders::cluster_key::{slice_bounds, ClusterGrid};
+use shaders::layout::*;
+use shaders::octahedral::Precision;
+
+/// One frame's GPU times.
+#[derive(Clone, Debug, Default)]
+pub struct FrameTimes {
+    /// Every timed pass of the frame (async-compute queue first), in recording order.
+    pub passes: Vec<PassTiming>,
+    /// The whole frame over both queues (`None` where the device has no timestamps).
+    pub sample: Option<frame_time::FrameSample>,
+}
+
+/// Everything a frame reads but the technique.
+struct Resources {
+    settings: Settings,
+    params: FrameParams,
+    grid: ClusterGrid,
+    view: ViewTransform,
+    fov_y_radians: f32,
+    near: f32,
+    geometry: gbuffer::Geometry,
+    indices: Vec<u32>,
+    textures: gbuffer::Textures,
+    camera: Buffer,
+    targets: gbuffer::Targets,
+    lights: Buffer,
+    lights_view: Vec<PointLight>,
+    materials_cpu: Vec<MaterialGpu>,
+    material_names: Vec<String>,
+    materials: Buffer,
+    bounds: Vec<f32>,
+    bounds_buf: Buffer,
+    frame: Buffer,
+    /// The device compares timestamps across queues (`DeviceInfo::timestamps_across_queues`).
+    across_queues: bool,
+}
+
+impl Resources {
+    fn inputs(&self) -> FrameInputs<'_> {
+        FrameInputs {
+            params: self.params,
+            settings: &self.settings,
+            geometry: &self.geometry,
+            indices: &self.indices,
+            textures: &self.textures,
+            camera: &self.camera,
+            targets: &self.targets,
+            lights: &self.lights,
+            lights_view: &self.lights_view,
+            materials: &self.materials,
+            bounds: &self.bounds_buf,
+            frame: &self.frame,
+        }
+    }
+
+    /// The buffers the frame loop owns, by name and bytes.
+    fn buffers(&self) -> Vec<(String, u64)> {
+        vec![
+            ("geometry".into(), self.geometry.bytes()),
+            ("textures".into(), self.textures.bytes()),
+            ("gbuffer".into(), self.targets.bytes()),
+            ("lights".into(), self.lights.size),
+            ("frame".into(), self.frame.size),
+        ]
+    }
+
+    /// Creates the technique of `settings` (refusing scenes with transparent materials where it
+    /// has no transparent pass).
+    fn technique(&self, gpu: &Gpu) -> Result<Box<dyn LightingTechnique>> {
+        let s = &self.settings;
+        if !self.geometry.transparent.is_empty() && !s.technique.draws_transparency() {
+            bail!("{}", transparent::refusal(s.technique, &self.geometry.transparent, &self.material_names, &self.materials_cpu));
+        }
+        s.technique.create(gpu, &self.inputs())
+    }
+}
+
+/// What a technique reports after its last frame.
+struct TechReport {
+    lists: ListStats,
+    transparency: Option<transparent::TransparencyStats>,
+    buffers: Vec<(String, u64)>,
+    cluster_lists: Option<ClusterLists>,
+    tile_lists: Vec<Vec<u32>>,
+}
+
+fn tech_report(tech: &mut dyn LightingTechnique, read_back: bool) -> Result<TechReport> {
+    Ok(TechReport {
+        lists: tech.stats()?,
+        transparency: tech.transparency(),
+        buffers: tech.buffers(),
+        cluster_lists: if read_back { tech.cluster_lists()? } else { None },
+        tile_lists: if read_back { tech.tile_lists()?.unwrap_or_default() } else { Vec::new() },
+    })
+}
+
+/// The uploaded scene, the frame's targets and a lighting technique (see the module doc).
+pub struct Renderer {
+    res: Resources,
+    tech: Box<dyn LightingTechnique>,
+    profiler: Profiler,
+    async_profiler: Profiler,
+    /// Whether the technique's async work runs on the async-compute queue.
+    overlapped: bool,
+    /// Times a buffer had to grow and a frame re-run, over every frame so far.
+    pub regrowths: u32,
+}
+
+impl Renderer {
+    /// Checks the scene and settings, uploads the scene and creates the technique.
+    pub fn new(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Self> {
+        let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
+        if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
+            bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
+        }
+        if let Some(d) = scene.draws.iter().find(|d| d.params.normal_precision != s.normal_precision.code()) {
+            bail!(
+                "a draw encodes normals at precision {:?} but the frame reads them at {:?}: flatten the scene at the frame's precision",
+                Precision::from_u32(d.params.normal_precision),
+                s.normal_precision
+            );
+        }
+        check_view(s)?;
+        let ctx = &gpu.ctx;
+        check_light_count(gpu, scene.lights.len())?;
+        let n = s.width * s.height;
+        let lights_view = lights_to_view(&scene.view, scene.lights)?;
+        let positions = scene.view.relative_positions(scene.positions);
+        let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, &scene.draws, &scene.materials)
+            .context("uploading geometry")?;
+        let aspect = s.width as f32 / s.height as f32;
+        let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
+        let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
+        let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
+        let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
+        let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
+        let bounds = slice_bounds(&grid);
+        let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
+        let frame = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
+        let params = FrameParams {
+            grid,
+            count: n,
+            num_lights: scene.lights.len() as u32,
+            light_capacity: 0,
+            effects: scene.effects,
+            normal_precision: s.normal_precision.code(),
+            view: s.view.code(),
+            exposure: s.exposure,
+            heat_max: HEAT_MAX,
+        };
+        let res = Resources {
+            settings: s.clone(),
+            params,
+            grid,
+            view: scene.view,
+            fov_y_radians: scene.fov_y_radians,
+            near: scene.near,
+            geometry,
+            indices: scene.indices.to_vec(),
+            textures,
+            camera,
+            targets,
+            lights,
+            lights_view,
+            materials_cpu: scene.materials.clone(),
+            material_names: scene.material_names.clone(),
+            materials,
+            bounds,
+            bounds_buf,
+            frame,
+            across_queues: ctx.info.timestamps_across_queues,
+        };
+        let tech = res.technique(gpu)?;
+        let overlapped = tech.has_async_work() && s.async_compute && ctx.async_compute_queue.is_some();
+        Ok(Self { res, tech, profiler: Profiler::new(ctx, 16)?, async_profiler: Profiler::new_async(ctx, 4)?, overlapped, regrowths: 0 })
+    }
+
+    /// The settings frames are rendered with.
+    pub fn settings(&self) -> &Settings {
+        &self.res.settings
+    }
+
+    /// The cluster grid of the frame.
+    pub fn grid(&self) -> ClusterGrid {
+        self.res.grid
+    }
+
+    /// The output frame: one packed RGBA8 word per pixel, rows top to bottom (what the viewer
+    /// copies to its window).
+    pub fn frame_buffer(&self) -> &Buffer {
+        &self.res.frame
+    }
+
+    /// Whether the technique's light-only passes run on the async-compute queue.
+    pub fn overlapped(&self) -> bool {
+        self.overlapped
+    }
+
+    /// Renders one frame: the async work, the G-buffer and the technique's passes; when a buffer
+    /// was too small, grows it and renders the frame again (at most [`MAX_REGROWTHS`] times).
+    pub fn frame(&mut self, gpu: &Gpu) -> Result<FrameTimes> {
+        let (res, tech) = (&self.res, &mut self.tech);
+        let inputs = res.inputs();
+        let mut regrowths = 0;
+        loop {
+            gpu.ctx.run_overlapped(
+                self.overlapped,
+                Some(&mut self.profiler),
+                Some(&mut self.async_profiler),
+                |rec| tech.record_async(gpu, rec, &inputs),
+                |rec| match tech.uses_gbuffer() {
+                    true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets)),
+                    false => Ok(()),
+                },
+                |rec| tech.record(gpu, rec, &inputs),
+            )?;
+            match tech.grow_if_needed(gpu)? {
+                Some(grown) => {
+                    regrowths += 1;
+                    self.regrowths += 1;
+                    if regrowths > MAX_REGROWTHS {
+                        bail!("{}: buffers keep growing ({grown}): giving up", res.settings.technique.name());
+                    }
+                }
+                None => break,
+            }
+        }
+        let ((mut passes, async_span), (main_passes, main_span)) = (self.async_profiler.results_and_span()?, self.profiler.results_and_span()?);
+        passes.extend(main_passes);
+        let raster_ms = passes.iter().filter(|p| p.raster && p.queue == Queue::Main).map(|p| p.ms).sum();
+        let sample = frame_time::sample(main_span, async_span, gpu.ctx.info.timestamps_across_queues, raster_ms);
+        Ok(FrameTimes { passes, sample })
+    }
+
+    /// Moves the camera: vertices and lights are uploaded anew relative to `view`'s eye
+    /// (`world_positions` and `world_lights` as in the [`SceneInput`] the renderer was made from).
+    pub fn set_view(&mut self, gpu: &Gpu, view: ViewTransform, world_positions: &[[f32; 3]], world_lights: &[PointLight]) -> Result<()> {
+        let r = &mut self.res;
+        r.view = view;
+        r.geometry.positions.write(&view.relative_positions(world_positions)).context("uploading vertices")?;
+        let aspect = r.settings.width as f32 / r.settings.height as f32;
+        r.camera.write(&[gbuffer::raster_camera(view.rotation(), r.fov_y_radians, aspect, r.near)])?;
+        self.set_lights(gpu, world_lights)
+    }
+
+    /// Replaces the lights (world space, seen from the current view). A different count
+    /// reallocates the light buffer and creates the technique anew; on an error the renderer
+    /// keeps its lights and technique.
+    pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight]) -> Result<()> {
+        let lights_view = lights_to_view(&self.res.view, world_lights)?;
+        if lights_view.len() == self.res.lights_view.len() {
+            self.res.lights.write(&lights_view).context("uploading lights")?;
+            self.res.lights_view = lights_view;
+            self.tech.lights_moved(&self.res.inputs());
+            return Ok(());
+        }
+        check_light_count(gpu, lights_view.len())?;
+        let lights = Buffer::from_slice(&gpu.ctx, "lights", &lights_view).context("allocating the light buffer")?;
+        let old_lights = std::mem::replace(&mut self.res.lights, lights);
+        let old_view = std::mem::replace(&mut self.res.lights_view, lights_view);
+        let old_count = std::mem::replace(&mut self.res.params.num_lights, world_lights.len() as u32);
+        if let Err(e) = self.replace_technique(gpu) {
+            self.res.lights = old_lights;
+            self.res.lights_view = old_view;
+            self.res.params.num_lights = old_count;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Changes the technique, the view or other settings of the same frame size, tiles and
+    /// normal encoding: the technique is created anew. On an error the renderer keeps its
+    /// settings and technique.
+    pub fn set_settings(&mut self, gpu: &Gpu, s: &Settings) -> Result<()> {
+        let old = &self.res.settings;
+        if (s.width, s.height, s.tile_size, s.normal_precision) != (old.width, old.height, old.tile_size, old.normal_precision) {
+            bail!("a new frame size, tile size or normal encoding needs a new renderer");
+        }
+        check_view(s)?;
+        let old = std::mem::replace(&mut self.res.settings, s.clone());
+        let (old_view, old_exposure) = (self.res.params.view, self.res.params.exposure);
+        (self.res.params.view, self.res.params.exposure) = (s.view.code(), s.exposure);
+        if let Err(e) = self.replace_technique(gpu) {
+            self.res.settings = old;
+            (self.res.params.view, self.res.params.exposure) = (old_view, old_exposure);
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    fn replace_technique(&mut self, gpu: &Gpu) -> Result<()> {
+        let tech = self.res.technique(gpu)?;
+        let s = &self.res.settings;
+        self.overlapped = tech.has_async_work() && s.async_compute && gpu.ctx.async_compute_queue.is_some();
+        self.tech = tech;
+        Ok(())
+    }
+
+    /// The light lists of the last frame; with `longest`, the longest list of the clustered
+    /// techniques too, read back from their lists (the others count theirs on the GPU).
+    pub fn list_stats(&mut self, longest: bool) -> Result<ListStats> {
+        let mut s = self.tech.stats()?;
+        if longest && s.max_list == 0 {
+            if let Some(c) = self.tech.cluster_lists()? {
+                s.max_list = c.counts.iter().copied().max().unwrap_or(0);
+            }
+        }
+        Ok(s)
+    }
+
+    /// The last frame's pixels (packed RGBA8 words, rows top to bottom).
+    pub fn pixels(&mut self) -> Result<Vec<u32>> {
+        let n = self.res.params.count as usize;
+        Ok(self.res.frame.read(n)?)
+    }
+
+    /// The last frame as [`super::render`] reports it, with the given per-frame times (medians
+    /// over them) and, with `read_back`, the G-buffer and light lists for checks and statistics.
+    pub fn report(&mut self, times: &[FrameTimes], read_back: bool) -> Result<Frame> {
+        let r = tech_report(self.tech.as_mut(), read_back)?;
+        let overlapped = self.overlapped;
+        finish(&mut self.res, r, times, self.regrowths, overlapped, read_back)
+    }
+
+    /// [`Renderer::report`] that frees the technique's buffers before reading the frame back
+    /// (the largest frames hold little else).
+    pub fn into_report(self, times: &[FrameTimes], read_back: bool) -> Result<Frame> {
+        let Renderer { mut res, mut tech, overlapped, regrowths, .. } = self;
+        let r = tech_report(tech.as_mut(), read_back)?;
+        drop(tech);
+        finish(&mut res, r, times, regrowths, overlapped, read_back)
+    }
+}
+
+fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u32, overlapped: bool, read_back: bool) -> Result<Frame> {
+    let n = res.params.count as usize;
+    let mut buffers = res.buffers();
+    buffers.extend(r.buffers);
+    let pixels: Vec<u32> = res.frame.read(n)?;
+    let readback = if read_back {
+        let t = &mut res.targets;
+        let depth: Vec<u32> = t.depth_buf.read(n)?;
+        let precision = res.settings.normal_precision;
+        let words: Vec<u32> = t.normal_buf.read(precision.gbuffer_words() as usize * n)?;
+        let normals = words
+            .chunks(precision.gbuffer_words() as usize)
+            .map(|w| shaders::octahedral::decode([w[0], w.get(1).copied().unwrap_or(0), w.get(2).copied().unwrap_or(0)], precision))
+            .collect();
+        let albedo: Vec<u32> = t.albedo_buf.read(n)?;
+        let c = r.cluster_lists.unwrap_or(ClusterLists { keys: vec![], unique: vec![], counts: vec![], offsets: vec![], list: vec![] });
+        Some(Readback {
+            depth,
+            normals,
+            albedo,
+            keys: c.keys,
+            unique: c.unique,
+            counts: c.counts,
+            offsets: c.offsets,
+            list: c.list,
+            lights_view: res.lights_view.clone(),
+            grid: res.grid,
+            bounds: res.bounds.clone(),
+            tile_lists: r.tile_lists,
+            transparent: !res.geometry.transparent.is_empty(),
+        })
+    } else {
+        None
+    };
+    let passes: Vec<Vec<PassTiming>> = times.iter().map(|t| t.passes.clone()).collect();
+    let samples: Vec<frame_time::FrameSample> = times.iter().filter_map(|t| t.sample).collect();
+    let (timings, timing_spread) = super::median_timings(&passes);
+    Ok(Frame {
+        pixels,
+        gpu_frame: frame_time::median(&samples, res.across_queues),
+        timings,
+        timing_spread,
+        unique_clusters: r.lists.clusters,
+        light_refs: r.lists.light_refs,
+        pages: r.lists.pages,
+        regrowths,
+        max_list: r.lists.max_list,
+        buffers,
+        readback,
+        grid: res.grid,
+        overlapped,
+        transparency: r.transparency,
+    })
+}
+
+fn check_view(s: &Settings) -> Result<()> {
+    if !View::FRAME.contains(&s.view) {
+        bail!("view {:?} is not a view of a rendered frame (one of {:?})", s.view, View::FRAME);
+    }
+    Ok(())
+}
+
+/// Lavapipe's loop limiter bounds the lights one invocation visits.
+fn check_light_count(gpu: &Gpu, lights: usize) -> Result<()> {
+    let max = shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
+    if gpu.ctx.info.is_llvmpipe() && lights > max as usize {
+        bail!(
+            "{lights} lights: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so one invocation \
+             can visit at most {max} lights there (use fewer lights or a GPU)"
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,290 @@
+//! The viewer's state apart from its window: the scene, its lights (generated and animated), the
+//! settings of `render`, the fly camera and the [`Renderer`] that draws every frame with the
+//! same passes as `render`. Key actions change it ([`Viewer::apply`]); each frame
+//! ([`Viewer::render`]) uploads what moved and renders.
+use super::controls::{Action, FlyCamera, Input};
+use super::overlay::{Lists, OverlayText};
+use crate::args::view_name;
+use crate::bad_input::bad_input;
+use crate::gpu::Gpu;
+use crate::preflight;
+use crate::render::{self, FrameTimes, Renderer, Settings, Technique};
+use crate::render_cmd::RenderArgs;
+use crate::scene::bookmark::Bookmark;
+use crate::scene::flatten::{flatten, scene_input, Flattened};
+use crate::scene::{lights, Camera, Scene};
+use anyhow::{Context as _, Result};
+use shaders::layout::{PointLight, View};
+use std::collections::VecDeque;
+use std::path::Path;
+
+/// Frames whose times a screenshot's statistics take medians over.
+const STATS_FRAMES: usize = 10;
+/// Frames between two read-backs of the light-list statistics for the overlay.
+const LISTS_EVERY: u64 = 15;
+
+pub struct Viewer {
+    pub scene: Scene,
+    /// The scene's own camera: near, far and field of view of every frame.
+    scene_camera: Camera,
+    flat: Flattened,
+    /// Lights before the animation (generated with `seed`, or the description's).
+    base_lights: Vec<PointLight>,
+    /// The lights of the current frame: `lights::animate(base_lights, time)`.
+    lights: Vec<PointLight>,
+    seed: u64,
+    pub settings: Settings,
+    pub camera: FlyCamera,
+    renderer: Option<Renderer>,
+    /// Animation time, seconds; it stands still while `paused`.
+    pub time: f32,
+    pub paused: bool,
+    pub text: OverlayText,
+    /// Frames rendered.
+    pub frames: u64,
+    recent: VecDeque<FrameTimes>,
+    camera_moved: bool,
+}
+
+impl Viewer {
+    /// Loads the scene and its lights as `render` does (`a`'s flags; `--camera` places the fly
+    /// camera, else the scene's camera does).
+    pub fn new(gpu: &Gpu, a: &RenderArgs) -> Result<Self> {
+        crate::render_cmd::check_args(gpu, a)?;
+        let mut scene = Scene::load(&a.scene, &a.assets)?;
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
+        let base_lights = match scene.lights.is_empty() {
+            true => {
+                if a.lights == 0 {
+                    crate::bail_input!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
+                }
+                lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?
+            }
+            false => std::mem::take(&mut scene.lights),
+        };
+        let scene_camera = scene.camera;
+        let at = a.camera.unwrap_or_else(|| Bookmark { fov_y_degrees: None, ..Bookmark::of_camera(&scene_camera) });
+        scene.camera = at.apply(&scene_camera);
+        scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
+        let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
+        let (lo, hi) = scene.bounds;
+        let speed = ((hi - lo).length() / 30.0).max(0.1);
+        let settings = Settings {
+            width: a.frame.width,
+            height: a.frame.height,
+            tile_size: a.frame.tile_size,
+            technique: a.technique,
+            view: a.view,
+            normal_precision: a.normal_precision,
+            exposure: 1.0,
+            frames: 0,
+            read_back: false,
+            bvh_branching: a.bvh_branching.unwrap_or(0),
+            async_compute: !a.no_async_compute,
+            sort: a.sort,
+            fp_lists: a.fp_lists,
+            oit: a.oit,
+        };
+        let time = a.time.unwrap_or(0.0);
+        let lights = lights::animate(&base_lights, time);
+        Ok(Self {
+            scene,
+            scene_camera,
+            flat,
+            base_lights,
+            lights,
+            seed: a.seed,
+            settings,
+            camera: FlyCamera { at, speed },
+            renderer: None,
+            time,
+            paused: false,
+            text: OverlayText::default(),
+            frames: 0,
+            recent: VecDeque::new(),
+            camera_moved: false,
+        })
+    }
+
+    /// Renders at `width × height` from now on (a new renderer when the size changed).
+    pub fn ensure_size(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<()> {
+        if self.renderer.as_ref().is_some_and(|r| (r.settings().width, r.settings().height) == (width, height)) {
+            return Ok(());
+        }
+        preflight::check_frame(&gpu.ctx.info, width, height, self.settings.tile_size, self.settings.normal_precision)
+            .with_context(|| format!("the window's size {width}x{height}"))?;
+        self.renderer = None; // frees the old targets first
+        self.settings.width = width;
+        self.settings.height = height;
+        self.scene.camera = self.camera.at.apply(&self.scene_camera);
+        let input = scene_input(&self.scene, &self.flat, &self.lights);
+        self.renderer = Some(Renderer::new(gpu, &input, &self.settings).context("creating the renderer")?);
+        self.recent.clear();
+        self.text.reset();
+        Ok(())
+    }
+
+    /// Moves the camera by `input`'s held keys and `look`, and the animation by `dt` seconds.
+    pub fn advance(&mut self, input: &Input, look: (f32, f32), dt: f32) {
+        self.camera_moved |= self.camera.update(input, look, dt);
+        if !self.paused {
+            self.time += dt;
+        }
+    }
+
+    /// Applies a key action (those of the window — quit, screenshot, overlay — are the
+    /// window's). A change the technique cannot take (too many lights, a scene it refuses) is a
+    /// note on the overlay, and the viewer keeps what it had.
+    pub fn apply(&mut self, gpu: &Gpu, action: Action) {
+        let done = match action {
+            Action::NextTechnique => {
+                let i = Technique::ALL.iter().position(|&t| t == self.settings.technique).unwrap_or(0);
+                self.set_technique(gpu, Technique::ALL[(i + 1) % Technique::ALL.len()])
+            }
+            Action::Technique(i) => match Technique::ALL.get(i) {
+                Some(&t) => self.set_technique(gpu, t),
+                None => Ok(()),
+            },
+            Action::MoreLights => self.set_light_count(gpu, self.base_lights.len().saturating_mul(2)),
+            Action::FewerLights => self.set_light_count(gpu, (self.base_lights.len() / 2).max(1)),
+            Action::ToggleHeatmap => self.set_view(gpu, if self.settings.view == View::Heatmap { View::Shaded } else { View::Heatmap }),
+            Action::NextView => {
+                let i = View::FRAME.iter().position(|&v| v == self.settings.view).unwrap_or(0);
+                self.set_view(gpu, View::FRAME[(i + 1) % View::FRAME.len()])
+            }
+            Action::TogglePause => {
+                self.paused = !self.paused;
+                Ok(())
+            }
+            Action::Screenshot | Action::PrintCamera | Action::ToggleOverlay | Action::Quit => Ok(()),
+        };
+        if let Err(e) = done {
+            let line = crate::bad_input::one_line(&e);
+            eprintln!("warning: {line}");
+            self.text.note(line);
+        }
+    }
+
+    fn set_technique(&mut self, gpu: &Gpu, t: Technique) -> Result<()> {
+        let info = &gpu.ctx.info;
+        preflight::check_tile_for(t, self.settings.tile_size)?;
+        preflight::check_lights(info, t, self.settings.tile_size, self.base_lights.len() as u64, &format!("{} lights", self.base_lights.len()))?;
+        let s = Settings { technique: t, ..self.settings.clone() };
+        if let Some(r) = self.renderer.as_mut() {
+            r.set_settings(gpu, &s)?;
+        }
+        self.settings = s;
+        self.text.reset();
+        Ok(())
+    }
+
+    fn set_view(&mut self, gpu: &Gpu, view: View) -> Result<()> {
+        let s = Settings { view, ..self.settings.clone() };
+        if let Some(r) = self.renderer.as_mut() {
+            r.set_settings(gpu, &s)?;
+        }
+        self.settings = s;
+        Ok(())
+    }
+
+    /// `n` lights generated anew with the same seed (a description's own lights are replaced).
+    fn set_light_count(&mut self, gpu: &Gpu, n: usize) -> Result<()> {
+        let what = format!("{n} lights");
+        preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.tile_size, n as u64, &what)?;
+        let base = lights::uniform(&self.scene, n, self.seed).with_context(|| format!("generating {what}"))?;
+        let animated = lights::animate(&base, self.time);
+        if let Some(r) = self.renderer.as_mut() {
+            r.set_lights(gpu, &animated)?;
+        }
+        (self.base_lights, self.lights) = (base, animated);
+        self.text.reset();
+        Ok(())
+    }
+
+    /// Renders a frame: uploads the camera and the lights where they moved, then every pass.
+    pub fn render(&mut self, gpu: &Gpu) -> Result<&FrameTimes> {
+        let r = self.renderer.as_mut().context("no renderer: the window has no size")?;
+        let lights_moved = !self.paused || self.camera_moved;
+        if lights_moved {
+            self.lights = lights::animate(&self.base_lights, self.time);
+        }
+        if self.camera_moved {
+            self.scene.camera = self.camera.at.apply(&self.scene_camera);
+            let view = scene_input(&self.scene, &self.flat, &self.lights).view;
+            r.set_view(gpu, view, &self.flat.positions, &self.lights)?;
+        } else if lights_moved {
+            r.set_lights(gpu, &self.lights)?;
+        }
+        self.camera_moved = false;
+        let times = r.frame(gpu)?;
+        if self.frames.is_multiple_of(LISTS_EVERY) {
+            self.text.lists = Some(list_summary(r)?);
+        }
+        self.text.add(&times);
+        if self.recent.len() == STATS_FRAMES {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(times);
+        self.frames += 1;
+        Ok(self.recent.back().expect("pushed above"))
+    }
+
+    /// The renderer, once the window has a size.
+    pub fn renderer(&self) -> Option<&Renderer> {
+        self.renderer.as_ref()
+    }
+
+    /// The camera as `render --camera` and `--time` reproduce it.
+    pub fn bookmark_flags(&self) -> String {
+        format!("--camera {} --time {}", self.camera.at, self.time)
+    }
+
+    /// The overlay's first lines.
+    pub fn header(&self, present_mode: &str) -> Vec<String> {
+        let s = &self.settings;
+        let i = Technique::ALL.iter().position(|&t| t == s.technique).unwrap_or(0);
+        vec![
+            format!("{}  {}x{}  present {present_mode}", self.scene.name, s.width, s.height),
+            format!("technique {} ({}/{})   view {}", s.technique.name(), i + 1, Technique::ALL.len(), view_name(s.view)),
+            format!("lights {}{}", self.lights.len(), if self.paused { "   (animation paused)" } else { "" }),
+        ]
+    }
+
+    /// Writes the last frame as `png` (the heatmap with its legend, as `render` writes it) and
+    /// its statistics beside it (`.json`: `render --stats`'s, plus the viewer's camera, time and
+    /// `overlay` lines).
+    pub fn screenshot(&mut self, gpu: &Gpu, png: &Path, overlay: &[String]) -> Result<()> {
+        let r = self.renderer.as_mut().context("no frame to save: nothing was rendered yet")?;
+        let times: Vec<FrameTimes> = self.recent.iter().cloned().collect();
+        let mut frame = r.report(&times, true)?;
+        let (w, h) = (self.settings.width, self.settings.height);
+        if self.settings.view == View::Heatmap {
+            render::legend::draw(&mut frame.pixels, w, h, render::HEAT_MAX);
+        }
+        crate::debug_frame::save_png(png, w, h, &frame.pixels)?;
+        let settings = Settings { frames: times.len() as u32, read_back: true, ..self.settings.clone() };
+        let mut json = render::stats::stats_json(&gpu.ctx.info, &self.scene.name, self.lights.len(), &settings, &frame);
+        json["viewer"] = serde_json::json!({
+            "camera": self.camera.at.to_string(),
+            "time": self.time,
+            "paused": self.paused,
+            "frame": self.frames,
+            "technique": self.settings.technique.name(),
+            "view": view_name(self.settings.view),
+            "overlay": overlay,
+        });
+        let path = png.with_extension("json");
+        std::fs::write(&path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
+        Ok(())
+    }
+}
+
+/// Clusters and lights per cluster of the last frame (the clustered techniques' longest list
+/// read back from their lists; the others report theirs).
+fn list_summary(r: &mut Renderer) -> Result<Lists> {
+    let s = r.list_stats(true)?;
+    let mean = if s.clusters > 0 { s.light_refs as f64 / s.clusters as f64 } else { 0.0 };
+    Ok(Lists { clusters: s.clusters, mean, max: s.max_list })
+}

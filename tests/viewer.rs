@@ -1,0 +1,134 @@
+//! `manylights view` in a real window under Xvfb (`xvfb-run`), validation on, driven by a
+//! `--script`: it flies, turns, switches through every technique, toggles the heatmap, doubles
+//! the lights, resizes the window to 1×1 and back, saves screenshots and exits with Escape.
+//! Every screenshot (the frame the viewer copies to the window, without the overlay) must equal
+//! `manylights render` at the same camera, animation time and settings within 1/255; a
+//! technique switch changes the overlay's text, not the image.
+mod common;
+use common::cli::manylights;
+use common::temp::TempDir;
+use std::path::Path;
+
+/// Window size and lights: small, so that the whole run takes well under a minute on lavapipe.
+const SIZE: (u32, u32) = (160, 90);
+const LIGHTS: u32 = 64;
+
+fn rgba(path: &Path) -> ((u32, u32), Vec<u8>) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgba8();
+    (img.dimensions(), img.into_raw())
+}
+
+/// The largest channel difference of two PNGs of the same size.
+fn worst(a: &Path, b: &Path) -> u8 {
+    let ((sa, pa), (sb, pb)) = (rgba(a), rgba(b));
+    assert_eq!(sa, sb, "{} and {} differ in size", a.display(), b.display());
+    pa.iter().zip(&pb).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+}
+
+fn stats(png: &Path) -> serde_json::Value {
+    let json = png.with_extension("json");
+    serde_json::from_slice(&std::fs::read(&json).unwrap_or_else(|e| panic!("{}: {e}", json.display()))).unwrap()
+}
+
+/// Renders what screenshot `png` shows with `manylights render` (its camera, time, technique,
+/// view, light count and size from the screenshot's JSON) and asserts the two within 1/255.
+fn assert_matches_render(png: &Path, dir: &TempDir) {
+    let s = stats(png);
+    let v = &s["viewer"];
+    let (w, h) = (s["resolution"][0].as_u64().unwrap().to_string(), s["resolution"][1].as_u64().unwrap().to_string());
+    let out = dir.join(&format!("render-{}", png.file_name().unwrap().to_string_lossy()));
+    let lights = s["lights"].as_u64().unwrap().to_string();
+    let time = v["time"].as_f64().unwrap().to_string();
+    let args = [
+        "render", "--scene", "city", "--lights", &lights, "--width", &w, "--height", &h, "--frames", "0",
+        "--technique", v["technique"].as_str().unwrap(), "--view", v["view"].as_str().unwrap(),
+        "--camera", v["camera"].as_str().unwrap(), "--time", &time, "--out", out.to_str().unwrap(),
+    ];
+    let r = manylights(args);
+    assert!(r.ok, "{args:?}:\n{}", r.stderr);
+    let d = worst(png, &out);
+    assert!(d <= 1, "{} differs from `manylights render` by {d}/255 ({args:?})", png.display());
+}
+
+#[test]
+fn the_viewer_flies_switches_resizes_and_matches_render() {
+    let xvfb = std::process::Command::new("xvfb-run").arg("--help").output();
+    assert!(xvfb.is_ok(), "xvfb-run is missing: install xvfb and xauth (./dev.sh test installs them)");
+    let dir = TempDir::new("viewer");
+    let shot = |name: &str| dir.join(&format!("{name}.png"));
+    let p = |name: &str| shot(name).to_str().unwrap().to_owned();
+    // Tab from clustered-naive (the default) visits the other six techniques; `2` selects it again.
+    let names = ["clustered-bvh", "tiled", "tiled-2.5d", "clustered-aabb", "forward-plus", "deferred"];
+    let mut script = String::from("# fly a little, turn, stop the animation\n0 key Space\n1 down W\n1 mouse-down right\n2 mouse-move 60 -8\n3 mouse-up right\n6 up W\n");
+    script += &format!("8 shot {}\n8 key Tab\n", p("clustered-naive"));
+    let mut frame = 10;
+    for (i, name) in names.iter().enumerate() {
+        script += &format!("{frame} shot {}\n", p(name));
+        if i + 1 < names.len() {
+            script += &format!("{frame} key Tab\n");
+        }
+        frame += 2;
+    }
+    script += &format!("{frame} key 2\n{} key H\n{} shot {}\n", frame + 2, frame + 4, p("heatmap"));
+    script += &format!("{} key H\n{} key Plus\n{} shot {}\n", frame + 6, frame + 8, frame + 10, p("more-lights"));
+    script += &format!("{} resize 1 1\n{} shot {}\n", frame + 12, frame + 14, p("tiny"));
+    script += &format!("{} resize {} {}\n{} shot {}\n{} key Escape\n", frame + 16, SIZE.0, SIZE.1, frame + 18, p("back"), frame + 20);
+    let script_path = dir.write("fly.script", &script);
+    let bin = env!("CARGO_BIN_EXE_manylights");
+    let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
+    let out = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", bin, "view", "--scene", "city", "--lights", &LIGHTS.to_string(), "--width", &w, "--height", &h])
+        .args(["--present-mode", "mailbox", "--script", script_path.to_str().unwrap()])
+        .env("MANYLIGHTS_VALIDATION", "true")
+        .output()
+        .expect("running xvfb-run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "the viewer failed ({:?}):\n{err}\nscript:\n{script}", out.status.code());
+    assert!(!err.contains("validation") && !err.contains("panicked"), "{err}");
+
+    // Every technique's frame equals `render` at the same camera, and the others' frames.
+    let first = shot("clustered-naive");
+    assert_matches_render(&first, &dir);
+    for name in names {
+        let png = shot(name);
+        let s = stats(&png);
+        assert_eq!(s["viewer"]["technique"], name, "Tab reached {name}");
+        assert_matches_render(&png, &dir);
+        assert!(worst(&first, &png) <= 1, "{name}: a technique switch changed the image");
+    }
+    // The switch changed the overlay's text (the technique line), and nothing else moved.
+    let (a, b) = (stats(&first), stats(&shot("clustered-bvh")));
+    assert_ne!(a["viewer"]["overlay"][1], b["viewer"]["overlay"][1], "the overlay names the technique");
+    assert!(a["viewer"]["overlay"][1].as_str().unwrap().contains("clustered-naive"), "{}", a["viewer"]["overlay"]);
+    assert_eq!(a["viewer"]["camera"], b["viewer"]["camera"]);
+    assert_eq!(a["viewer"]["time"], 0.0, "the animation was paused at once");
+    assert_ne!(a["viewer"]["camera"], "", "the camera moved");
+
+    let heat = stats(&shot("heatmap"));
+    assert_eq!((heat["viewer"]["technique"].as_str(), heat["viewer"]["view"].as_str()), (Some("clustered-naive"), Some("heatmap")));
+    assert_matches_render(&shot("heatmap"), &dir);
+    assert!(worst(&first, &shot("heatmap")) > 1, "the heatmap is another image");
+    let more = stats(&shot("more-lights"));
+    assert_eq!(more["lights"], 2 * LIGHTS, "Plus doubles the lights");
+    assert_matches_render(&shot("more-lights"), &dir);
+    assert_eq!(stats(&shot("tiny"))["resolution"], serde_json::json!([1, 1]));
+    assert_eq!(stats(&shot("back"))["resolution"], serde_json::json!([SIZE.0, SIZE.1]));
+    assert!(worst(&shot("more-lights"), &shot("back")) <= 1, "the frame after 1×1 and back is the frame before");
+}
+
+/// A malformed script or camera is a one-line error (exit status 2) before any window opens.
+#[test]
+fn bad_viewer_input_is_a_one_line_error() {
+    let dir = TempDir::new("viewer-bad");
+    let bad = dir.write("bad.script", "0 key W\n1 jump\n");
+    let out = dir.join("x.png");
+    let cases: [(Vec<&str>, &str); 4] = [
+        (vec!["view", "--script", bad.to_str().unwrap()], "line 2: unknown command \"jump\""),
+        (vec!["view", "--script", "/nonexistent/x.script"], "cannot read it"),
+        (vec!["view", "--camera", "1,2,3"], "3 values"),
+        (vec!["render", "--camera", "1,2,3,0,95", "--out", out.to_str().unwrap()], "pitch 95"),
+    ];
+    for (args, needle) in cases {
+        common::cli::assert_refused(&manylights(&args), &format!("{args:?}"), common::cli::BAD_INPUT, &[needle]);
+    }
+}
