@@ -24,7 +24,7 @@ pub const MAX_FRAMES: u32 = 100_000;
 /// Arguments of `render` (see `manylights render --help`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Built-in scene (city, corridor, glass, sponza, bunny; `name@view` for a named camera view:
+    /// Built-in scene (city, corridor, glass, nurbs, sponza, bunny; `name@view` for a named camera view:
     /// city@corner, sponza@column, glass@stack), a .toml description, or an .obj, .gltf or .glb file.
     #[arg(long, default_value = "city")]
     pub scene: String,
@@ -72,6 +72,10 @@ pub struct RenderArgs {
     /// order-independent average of the rest, or `weighted` blended OIT (no lists, no sorting).
     #[arg(long, value_enum, default_value_t = crate::render::transparent::OitVariant::K4)]
     pub oit: crate::render::transparent::OitVariant,
+    /// Tessellation level of every NURBS patch: quads along each parameter direction (default:
+    /// each patch's own `level`, else 16).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::scene::nurbs::MAX_TESS_LEVEL as i64))]
+    pub tess_level: Option<u32>,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -143,6 +147,9 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
     if let Some(t) = a.time {
         scene.lights = lights::animate(&scene.lights, t);
+    }
+    if let Some(level) = a.tess_level {
+        scene.set_tess_level(level);
     }
     scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
     check_scene(gpu, a, &scene)?;

@@ -602,3 +602,20 @@ pub struct NurbsPatchGpu {
     pub _pad: u32,
 }
 const _: () = assert!(core::mem::size_of::<NurbsPatchGpu>() == 48);
+
+/// Push constants of the tessellation kernels (`crate::tessellation`): the patches' headers are
+/// `patch_count` entries of the header buffer, sorted by their vertex and index offsets; the
+/// grids fill the vertex streams from `first_vertex` (`vertex_count` vertices) and the index
+/// buffer from `first_index` (`quad_count` quads of six indices), without gaps.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TessellationParams {
+    pub patch_count: u32,
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub quad_count: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TessellationParams>() == 32);

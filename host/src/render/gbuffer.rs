@@ -101,12 +101,28 @@ pub struct Geometry {
 impl Geometry {
     /// Uploads the merged buffers and splits `draws` by their material's opacity (`materials`).
     pub fn upload(ctx: &Context, positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u32], draws: &[Draw], materials: &[MaterialGpu]) -> VkResult<Self> {
+        Self::upload_reserving(ctx, positions, normals, uvs, indices, draws, materials, [0, 0])
+    }
+
+    /// [`Geometry::upload`] with room for `extra[0]` more vertices and `extra[1]` more indices
+    /// after the uploaded ones, which kernels write (the NURBS tessellation pass, `nurbs.rs`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn upload_reserving(
+        ctx: &Context,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        uvs: &[[f32; 2]],
+        indices: &[u32],
+        draws: &[Draw],
+        materials: &[MaterialGpu],
+        extra: [u64; 2],
+    ) -> VkResult<Self> {
         let (transparent, draws) = draws.iter().copied().filter(|d| d.index_count > 0).partition(|d| is_transparent(d, materials));
         Ok(Self {
-            positions: Buffer::from_slice(ctx, "positions", positions)?,
-            normals: Buffer::from_slice(ctx, "normals", normals)?,
-            uvs: Buffer::from_slice(ctx, "uvs", uvs)?,
-            indices: Buffer::indices(ctx, "indices", indices)?,
+            positions: Buffer::from_slice_reserving(ctx, "positions", positions, extra[0])?,
+            normals: Buffer::from_slice_reserving(ctx, "normals", normals, extra[0])?,
+            uvs: Buffer::from_slice_reserving(ctx, "uvs", uvs, extra[0])?,
+            indices: Buffer::indices_reserving(ctx, "indices", indices, extra[1])?,
             draws,
             transparent,
         })

@@ -37,6 +37,7 @@ pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
+pub mod nurbs;
 pub mod reference;
 pub mod scan;
 pub mod sort;
@@ -129,6 +130,8 @@ pub struct SceneInput<'a> {
     pub effects: u32,
     /// Material names (by material index; may be shorter than `materials`), for messages.
     pub material_names: Vec<String>,
+    /// NURBS patches, tessellated on the GPU each frame into the geometry buffers ([`nurbs`]).
+    pub nurbs: Vec<nurbs::NurbsDraw<'a>>,
 }
 
 /// How to render.
@@ -257,8 +260,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let n = s.width * s.height;
     let lights_view = lights_to_view(&scene.view, scene.lights)?;
     let positions = scene.view.relative_positions(scene.positions);
-    let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, &scene.draws, &scene.materials)
-        .context("uploading geometry")?;
+    let (geometry, tessellation, indices) = nurbs::upload_geometry(ctx, scene, &positions).context("uploading geometry")?;
     if !geometry.transparent.is_empty() && !s.technique.draws_transparency() {
         bail!("{}", transparent::refusal(s.technique, &geometry.transparent, &scene.material_names, &scene.materials));
     }
@@ -288,11 +290,12 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
         ("lights".into(), lights.size),
         ("frame".into(), frame_buf.size),
     ];
+    buffers.extend(tessellation.iter().flat_map(|t| t.buffers()));
     let inputs = FrameInputs {
         params,
         settings: s,
         geometry: &geometry,
-        indices: scene.indices,
+        indices: &indices,
         textures: &textures,
         camera: &camera,
         targets: &targets,
@@ -316,9 +319,14 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
             Some(&mut profiler),
             Some(&mut async_profiler),
             |rec| tech.record_async(gpu, rec, &inputs),
-            |rec| match tech.uses_gbuffer() {
-                true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets)),
-                false => Ok(()),
+            |rec| {
+                if let Some(t) = &tessellation {
+                    rec.pass("tessellation", |rec| t.record(rec, &geometry))?;
+                }
+                match tech.uses_gbuffer() {
+                    true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &geometry, &textures, &camera, &targets)),
+                    false => Ok(()),
+                }
             },
             |rec| tech.record(gpu, rec, &inputs),
         )?;

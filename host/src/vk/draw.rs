@@ -172,6 +172,26 @@ impl Recorder<'_> {
         barrier(self.ctx, self.cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::FRAGMENT_SHADER);
     }
 
+    /// Makes earlier kernels' storage-buffer writes visible to the vertex stage of later raster
+    /// passes: as index-buffer reads and as storage-buffer reads of vertex shaders (geometry that
+    /// kernels wrote, e.g. tessellated NURBS grids).
+    pub fn draws_read_kernel_writes(&mut self) {
+        let b = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::INDEX_READ | vk::AccessFlags::SHADER_READ);
+        unsafe {
+            self.ctx.device.cmd_pipeline_barrier(
+                self.cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::VERTEX_SHADER,
+                vk::DependencyFlags::empty(),
+                &[b],
+                &[],
+                &[],
+            )
+        };
+    }
+
     /// Ends the raster pass begun by [`Recorder::begin_rendering`].
     pub fn end_rendering(&mut self) {
         unsafe { self.ctx.device.cmd_end_rendering(self.cmd) };
