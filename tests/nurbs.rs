@@ -2,8 +2,10 @@
 //! scene (the exact sphere, the torus and the teapot, tessellated by the compute pass each frame)
 //! renders with every technique equal to the brute-force reference within 1/255, its patches
 //! cover the pixels of their materials, the tessellation level reaches the pass, a scene without
-//! patches records no tessellation pass and allocates none of its buffers, and the command line
-//! renders `--scene nurbs` and refuses bad patches with one line naming the patch and the field.
+//! patches records no tessellation pass and allocates none of its buffers, adaptive levels
+//! (`--tess-error`) draw the same surfaces as a fine fixed level with every G-buffer technique
+//! equal to the reference, and the command line renders `--scene nurbs` and refuses bad patches
+//! with one line naming the patch and the field.
 //! (The pass's buffers against the CPU kernel functions: `tests/gpu_parity.rs`.)
 mod common;
 use common::cli::{assert_one_line_error, manylights};
@@ -11,7 +13,9 @@ use common::compare::{assert_every_technique_equals_deferred, cpu_shaded, TOLERA
 use common::pixels::{lit, worst_channel};
 use common::render::{city, frame, settings};
 use common::temp::TempDir;
-use host::render::{Frame, Settings, Technique};
+use host::gpu::Gpu;
+use host::render::{self, Frame, Settings, Technique};
+use host::scene::flatten::{flatten, scene_input};
 use host::scene::{lights, Scene};
 use shaders::layout::PointLight;
 
@@ -132,4 +136,68 @@ fn cli_renders_the_nurbs_scene_and_refuses_bad_patches() {
     );
     let r = manylights(["render", "--scene", bad.to_str().unwrap(), "--lights", "10", "--out", o]);
     assert_one_line_error(&r, "a negative weight", "bad.toml: NURBS patch \"nurbs[0]\": weights[2] = -2; weights must be positive and finite");
+}
+
+/// A frame with adaptive NURBS levels within `tolerance` pixels.
+fn adaptive(gpu: &Gpu, scene: &Scene, lights: &[PointLight], s: &Settings, tolerance: f32) -> anyhow::Result<Frame> {
+    let flat = flatten(scene, s.normal_precision)?;
+    let mut input = scene_input(scene, &flat, lights);
+    input.nurbs_tolerance = Some(tolerance);
+    render::render(gpu, &input, s)
+}
+
+/// Adaptive levels (the level kernel, indirect G-buffer draws): every technique that draws
+/// through the G-buffer equals the reference with the same levels; the image is that of a fine
+/// fixed tessellation (level 64, the adaptive maximum) but for silhouette pixels; Forward+ and
+/// transparent patches refuse adaptive levels with one line.
+#[test]
+fn adaptive_levels_equal_the_reference_and_a_fine_tessellation() {
+    let gpu = common::gpu();
+    let mut scene = nurbs_scene();
+    let l = lights::uniform(&scene, 2_000, 6).unwrap();
+    let s = |t| Settings { read_back: true, ..settings(160, 90, t) };
+    let reference = adaptive(&gpu, &scene, &l, &s(Technique::Deferred), 0.5).unwrap_or_else(|e| panic!("{e:#}"));
+    for &t in Technique::ALL.iter().filter(|&&t| t != Technique::Deferred && t != Technique::ForwardPlus) {
+        let f = adaptive(&gpu, &scene, &l, &s(t), 0.5).unwrap_or_else(|e| panic!("{t:?}: {e:#}"));
+        let worst = worst_channel(&reference.pixels, &f.pixels);
+        assert!(worst <= TOLERANCE, "adaptive levels, {t:?}: differs from deferred by {worst}/255");
+    }
+    let by_material = material_pixels(&reference, scene.materials.len());
+    assert!(by_material.iter().all(|&p| p > 150), "adaptive: pixels per material {by_material:?}");
+    scene.set_tess_level(64);
+    let fine = frame(&gpu, &scene, &l, &s(Technique::Deferred));
+    let differing = reference.pixels.iter().zip(&fine.pixels).filter(|(a, b)| common::pixels::channel_diff(**a, **b) > 8).count();
+    assert!(differing * 50 < reference.pixels.len(), "adaptive levels differ from level 64 at {differing} of {} pixels", reference.pixels.len());
+    let coarse = {
+        scene.set_tess_level(2);
+        frame(&gpu, &scene, &l, &s(Technique::Deferred))
+    };
+    let coarse_differing = coarse.pixels.iter().zip(&fine.pixels).filter(|(a, b)| common::pixels::channel_diff(**a, **b) > 8).count();
+    assert!(coarse_differing > 2 * differing, "level 2 should differ from level 64 more than the adaptive levels do ({coarse_differing} vs {differing} pixels)");
+
+    let e = format!("{:#}", adaptive(&gpu, &scene, &l, &s(Technique::ForwardPlus), 0.5).err().expect("forward+ refuses adaptive levels"));
+    assert!(e.contains("--tess-error") && e.contains("forward-plus") && !e.contains('\n'), "{e}");
+    let mut glassy = nurbs_scene();
+    glassy.materials[3].opacity = 0.5;
+    let e = format!("{:#}", adaptive(&gpu, &glassy, &l, &s(Technique::Deferred), 0.5).err().expect("transparent patches refuse adaptive levels"));
+    assert!(e.contains("--tess-error") && e.contains("\"gold\"") && !e.contains('\n'), "{e}");
+    common::assert_clean(&gpu);
+}
+
+/// `render --tess-error` renders the NURBS scene; a tolerance that is not a positive number and
+/// `--technique forward-plus` with it are one-line errors with status 2.
+#[test]
+fn cli_adaptive_levels() {
+    let dir = TempDir::new("cli-nurbs-adaptive");
+    let out = dir.join("adaptive.png");
+    let o = out.to_str().unwrap();
+    let r = manylights(["render", "--scene", "nurbs", "--lights", "300", "--width", "96", "--height", "54", "--frames", "0", "--tess-error", "0.5", "--out", o]);
+    assert!(r.ok, "render failed:\n{}", r.stderr);
+    assert_eq!(image::open(&out).expect("a readable PNG").to_rgba8().dimensions(), (96, 54));
+    for bad in ["0", "-1", "nan", "inf"] {
+        let r = manylights(["render", "--scene", "nurbs", "--tess-error", bad, "--out", o]);
+        assert_one_line_error(&r, &format!("--tess-error {bad}"), "--tess-error");
+    }
+    let r = manylights(["render", "--scene", "nurbs", "--technique", "forward-plus", "--tess-error", "1", "--out", o]);
+    assert_one_line_error(&r, "forward-plus with --tess-error", "forward-plus");
 }

@@ -76,6 +76,11 @@ pub struct RenderArgs {
     /// each patch's own `level`, else 16).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::scene::nurbs::MAX_TESS_LEVEL as i64))]
     pub tess_level: Option<u32>,
+    /// Adaptive NURBS tessellation: each patch's level picked on the GPU every frame so that its
+    /// triangles stay within this many pixels of the surface (levels 1 to 64; not with
+    /// forward-plus, nor with transparent patches).
+    #[arg(long, allow_negative_numbers = true)]
+    pub tess_error: Option<f32>,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -99,6 +104,14 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
     if let Some(t) = a.time.filter(|t| !t.is_finite()) {
         bail_input!("--time {t} is not a finite number of seconds");
+    }
+    if let Some(e) = a.tess_error {
+        if !(e.is_finite() && e > 0.0) {
+            bail_input!("--tess-error {e}: the tolerance must be a positive number of pixels");
+        }
+        if a.technique == Technique::ForwardPlus {
+            bail_input!("--tess-error: forward-plus draws NURBS patches from a CPU copy of the indices; adaptive levels need the G-buffer's indirect draws (use --tess-level, or another technique)");
+        }
     }
     Ok(())
 }
@@ -154,7 +167,8 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
     check_scene(gpu, a, &scene)?;
     let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
-    let input = scene_input(&scene, &flat, &scene.lights);
+    let mut input = scene_input(&scene, &flat, &scene.lights);
+    input.nurbs_tolerance = a.tess_error;
     let settings = Settings {
         width: a.frame.width,
         height: a.frame.height,

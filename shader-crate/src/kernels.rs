@@ -88,6 +88,8 @@ pub const SCAN_COUNTED_TOTAL: Kernel<CountedTotalParams> = Kernel::new("entries:
 pub const NURBS_VERTICES: Kernel<TessellationParams> = linear("tessellation::nurbs_vertices", 6);
 /// Headers, indices.
 pub const NURBS_INDICES: Kernel<TessellationParams> = linear("tessellation::nurbs_indices", 2);
+/// Adaptive levels, one invocation per patch: headers, knots, control points, draw arguments.
+pub const NURBS_LEVELS: Kernel<TessLevelParams> = Kernel::new("tessellation::nurbs_levels", 4, [64, 1, 1], false);
 
 // Radix sort (`entries.rs`, `radix.rs`): cooperative (barriers, ballots).
 const fn radix<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
@@ -166,6 +168,7 @@ pub const ALL: &[Kernel<()>] = &[
     SCAN_COUNTED_TOTAL.erased(),
     NURBS_VERTICES.erased(),
     NURBS_INDICES.erased(),
+    NURBS_LEVELS.erased(),
     RADIX_HISTOGRAM.erased(),
     RADIX_UPSWEEP.erased(),
     RADIX_SPINE.erased(),

@@ -619,3 +619,22 @@ pub struct TessellationParams {
     pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<TessellationParams>() == 32);
+
+/// Push constants of the adaptive level kernel (`crate::tessellation::nurbs_levels`): each of
+/// `patch_count` patches gets the level (1..=`max_level`) at which its grid stays within
+/// `tolerance` pixels of the surface, its control points being camera-relative and the frame
+/// `pixel_scale = height / (2·tan(fov_y / 2))` pixels per unit of size at unit distance.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TessLevelParams {
+    pub patch_count: u32,
+    pub max_level: u32,
+    pub pixel_scale: f32,
+    /// Pixels, > 0.
+    pub tolerance: f32,
+    /// The near plane: the smallest distance the estimate divides by.
+    pub near: f32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TessLevelParams>() == 32);

@@ -2,7 +2,8 @@
 //! patches packed after a prefix of other geometry, and its vertex streams and index buffer are
 //! read back and compared with the same functions run on the CPU
 //! (`shaders::tessellation::grid_vertex`, i.e. `nurbs::tessellate_vertex`, and `quad_indices`,
-//! i.e. `nurbs::tessellate_indices` plus the patch's first vertex).
+//! i.e. `nurbs::tessellate_indices` plus the patch's first vertex), at fixed levels and at the
+//! adaptive levels the level kernel picks (those against `tessellation::adaptive_level`).
 //!
 //! Bounds (see [`POSITION_ULPS`], [`NORMAL_ULPS`], [`UV_ULPS`]): indices are integers and must
 //! be equal. The floats run the same sequence of operations on both sides; they may differ where
@@ -12,12 +13,13 @@
 use super::{list, Report};
 use crate::gpu::Gpu;
 use crate::render::gbuffer::Geometry;
-use crate::render::nurbs::{params, Tessellation};
+use crate::render::nurbs::{params, Tessellation, ADAPTIVE_MAX_LEVEL};
+use crate::vk::Buffer;
 use crate::scene::nurbs::{sphere, teapot, torus, NurbsBuffers, NurbsPatch};
 use anyhow::{ensure, Result};
-use glam::Vec3;
-use shaders::layout::NurbsPatchGpu;
-use shaders::tessellation::{grid_vertex, quad_indices};
+use glam::{DVec3, Vec3, Vec4};
+use shaders::layout::{NurbsPatchGpu, TessLevelParams};
+use shaders::tessellation::{adaptive_level, draw_args, grid_vertex, quad_indices, DRAW_ARGS_WORDS};
 
 /// Positions: the bound is `POSITION_ULPS · ρ` ULP of the patch's scale `M` (the largest
 /// Cartesian control-point coordinate; ρ: largest over smallest weight). The point is
@@ -41,7 +43,8 @@ pub const UV_ULPS: u32 = 4;
 
 /// The test patches: the exact sphere (collapsed poles) and torus, the teapot's 32 bicubic
 /// patches (collapsed at the bottom's and the knob's centres), a polynomial quintic and a
-/// rational (5, 2) patch, and an unclamped cubic, with their levels (1 to 64).
+/// rational (5, 2) patch, an unclamped cubic, a sphere 400 units away and a flat square, with
+/// their fixed levels (1 to 64).
 fn patches() -> Vec<(NurbsPatch, u32)> {
     let mut x = 0x2545_f491u32;
     let mut r = move || {
@@ -61,14 +64,17 @@ fn patches() -> Vec<(NurbsPatch, u32)> {
     unclamped.knots_v = vec![0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0];
     let mut out = vec![(sphere(Vec3::new(1.0, -2.0, 0.5), 2.5), 64), (sphere(Vec3::ZERO, 1.0), 1), (torus(Vec3::new(0.0, 1.0, -4.0), 3.0, 0.8), 16)];
     out.extend(teapot().into_iter().enumerate().map(|(k, p)| (p, 2 + k as u32 % 7)));
-    out.extend([(quintic, 10), (rational, 13), (unclamped, 9)]);
+    let plane = NurbsPatch::polynomial(1, 1, 2, 2, vec![[-5.0, 0.0, 5.0], [5.0, 0.0, 5.0], [-5.0, 0.0, -5.0], [5.0, 0.0, -5.0]], 0);
+    out.extend([(quintic, 10), (rational, 13), (unclamped, 9), (sphere(Vec3::new(0.0, 0.0, -400.0), 1.0), 5), (plane, 3)]);
     out
 }
 
-/// Largest Cartesian control-point coordinate and largest over smallest weight of a patch.
-fn scale(p: &NurbsPatch) -> (f32, f32) {
-    let m = p.control_points.iter().flatten().fold(0f32, |m, c| m.max(c.abs()));
-    let (lo, hi) = p.weights.iter().fold((f32::MAX, 0f32), |(lo, hi), &w| (lo.min(w), hi.max(w)));
+/// Largest Cartesian control-point coordinate `M` and largest over smallest weight ρ of packed
+/// patch `h`.
+fn scale(b: &NurbsBuffers, h: &NurbsPatchGpu) -> (f32, f32) {
+    let cps = &b.control_points[h.cp_offset as usize..(h.cp_offset + h.size_u * h.size_v) as usize];
+    let m = cps.iter().flat_map(|c| [c[0] / c[3], c[1] / c[3], c[2] / c[3]]).fold(0f32, |m, x| m.max(x.abs()));
+    let (lo, hi) = cps.iter().fold((f32::MAX, 0f32), |(lo, hi), c| (lo.min(c[3]), hi.max(c[3])));
     (m, hi / lo)
 }
 
@@ -78,46 +84,74 @@ fn ulp_of(x: f32) -> f32 {
     2f32.powf(e - 23.0)
 }
 
-pub fn nurbs_tessellation(gpu: &Gpu) -> Result<Report> {
+/// What the pass wrote, read back.
+struct Written {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    indices: Vec<u32>,
+    /// Adaptive levels: each patch's header and draw arguments after the frame.
+    headers: Vec<NurbsPatchGpu>,
+    args: Vec<u32>,
+}
+
+/// Runs the pass over `packed` (grids after 5 vertices and 12 indices of other geometry, which
+/// must stay as they are) and reads back what it wrote.
+fn run(gpu: &Gpu, packed: &NurbsBuffers, levels: Option<TessLevelParams>) -> Result<Written> {
     let ctx = &gpu.ctx;
-    let patches = patches();
-    // Grids after 5 vertices and 12 indices of other geometry, which must stay as they are.
-    let (first_vertex, first_index) = (5u32, 12u32);
-    let mut packed = NurbsBuffers { vertices: first_vertex, indices: first_index, ..NurbsBuffers::default() };
-    for (p, level) in &patches {
-        p.validate("parity patch")?;
-        packed.push(p, *level);
-    }
-    let prefix_positions = [[7.0f32; 3]; 5];
+    let (first_vertex, first_index) = (FIRST_VERTEX, FIRST_INDEX);
+    let prefix_positions = [[7.0f32; 3]; FIRST_VERTEX as usize];
     let prefix_indices: Vec<u32> = (0..first_index).map(|i| 1000 + i).collect();
     let extra = [(packed.vertices - first_vertex) as u64, (packed.indices - first_index) as u64];
     let mut geometry = Geometry::upload_reserving(ctx, &prefix_positions, &prefix_positions, &[[7.0; 2]; 5], &prefix_indices, &[], &[], extra)?;
-    let pass = Tessellation::new(ctx, &packed, first_vertex, first_index)?;
+    let n = packed.patches.len();
+    if levels.is_some() {
+        geometry.indirect_args = Some(Buffer::storage(ctx, "nurbs draw arguments", 4 * DRAW_ARGS_WORDS as u64 * n as u64)?);
+    }
+    let mut pass = Tessellation::new(ctx, packed, first_vertex, first_index, levels)?;
     gpu.run(None, |rec| pass.record(rec, &geometry))?;
-    let n = packed.vertices as usize;
-    let positions: Vec<[f32; 3]> = geometry.positions.read(n)?;
-    let normals: Vec<[f32; 3]> = geometry.normals.read(n)?;
-    let uvs: Vec<[f32; 2]> = geometry.uvs.read(n)?;
-    let indices: Vec<u32> = geometry.indices.read(packed.indices as usize)?;
-    ensure!(positions[..5] == prefix_positions && uvs[..5] == [[7.0; 2]; 5], "the pass wrote over the vertices before its range");
-    ensure!(indices[..first_index as usize] == prefix_indices[..], "the pass wrote over the indices before its range");
+    let v = packed.vertices as usize;
+    let w = Written {
+        positions: geometry.positions.read(v)?,
+        normals: geometry.normals.read(v)?,
+        uvs: geometry.uvs.read(v)?,
+        indices: geometry.indices.read(packed.indices as usize)?,
+        headers: pass.headers_mut().read(n)?,
+        args: match geometry.indirect_args.as_mut() {
+            Some(a) => a.read(DRAW_ARGS_WORDS as usize * n)?,
+            None => vec![],
+        },
+    };
+    ensure!(w.positions[..5] == prefix_positions && w.uvs[..5] == [[7.0; 2]; 5], "the pass wrote over the vertices before its range");
+    ensure!(w.indices[..first_index as usize] == prefix_indices[..], "the pass wrote over the indices before its range");
+    Ok(w)
+}
 
-    let p = params(&packed, first_vertex, first_index);
-    let knots = &packed.knots;
-    let cps = &packed.control_points;
-    let (mut worst_pos, mut worst_normal, mut worst_uv) = (0f32, 0f32, 0u32);
+const FIRST_VERTEX: u32 = 5;
+const FIRST_INDEX: u32 = 12;
+
+/// Compares the grids the pass wrote for the patches of `headers` (their levels) with the CPU's;
+/// returns the worst position, normal and uv differences and the vertices and quads compared.
+fn compare(packed: &NurbsBuffers, headers: &[NurbsPatchGpu], w: &Written, what: &str) -> Result<(f32, f32, u32, u32, u32)> {
+    let p = params(packed, FIRST_VERTEX, FIRST_INDEX);
+    let (knots, cps) = (&packed.knots, &packed.control_points);
+    let (mut worst_pos, mut worst_normal, mut worst_uv, mut vertices, mut quads) = (0f32, 0f32, 0u32, 0u32, 0u32);
     let mut bad = Vec::new();
     for i in 0..p.vertex_count {
-        let (v, cpu) = grid_vertex(&packed.patches, &p, knots, cps, i);
-        let k = packed.patches.iter().rposition(|h: &NurbsPatchGpu| h.vertex_offset <= v).unwrap_or(0);
-        let (m, rho) = scale(&patches[k].0);
+        let (in_grid, v, cpu) = grid_vertex(headers, &p, knots, cps, i);
+        if !in_grid {
+            continue;
+        }
+        vertices += 1;
+        let k = headers.iter().rposition(|h| h.vertex_offset <= v).unwrap_or(0);
+        let (m, rho) = scale(packed, &headers[k]);
         let v = v as usize;
-        let pos = (0..3).map(|a| (positions[v][a] - cpu.position[a]).abs() / ulp_of(m) / rho.max(1.0)).fold(0f32, f32::max);
-        let nrm = (0..3).map(|a| (normals[v][a] - cpu.normal[a]).abs() / f32::EPSILON).fold(0f32, f32::max);
-        let uv = (0..2).map(|a| super::ulp_distance(uvs[v][a], cpu.uv[a])).max().unwrap_or(0);
+        let pos = (0..3).map(|a| (w.positions[v][a] - cpu.position[a]).abs() / ulp_of(m) / rho.max(1.0)).fold(0f32, f32::max);
+        let nrm = (0..3).map(|a| (w.normals[v][a] - cpu.normal[a]).abs() / f32::EPSILON).fold(0f32, f32::max);
+        let uv = (0..2).map(|a| super::ulp_distance(w.uvs[v][a], cpu.uv[a])).max().unwrap_or(0);
         // NaN compares false: a NaN is reported as a mismatch.
         if !(pos <= POSITION_ULPS && nrm <= NORMAL_ULPS && uv <= UV_ULPS) {
-            bad.push((k, v, positions[v], cpu.position, normals[v], cpu.normal, uvs[v], cpu.uv));
+            bad.push((k, v, w.positions[v], cpu.position, w.normals[v], cpu.normal, w.uvs[v], cpu.uv));
         }
         worst_pos = worst_pos.max(pos);
         worst_normal = worst_normal.max(nrm);
@@ -125,28 +159,83 @@ pub fn nurbs_tessellation(gpu: &Gpu) -> Result<Report> {
     }
     ensure!(
         bad.is_empty(),
-        "nurbs_tessellation: {} of {} vertices beyond {POSITION_ULPS}·ρ ULP (positions) / {NORMAL_ULPS} (normals) / {UV_ULPS} (uvs) \
+        "nurbs_tessellation ({what}): {} of {vertices} vertices beyond {POSITION_ULPS}·ρ ULP (positions) / {NORMAL_ULPS} (normals) / {UV_ULPS} (uvs) \
          (patch, vertex, gpu position, cpu, gpu normal, cpu, gpu uv, cpu):\n{}",
         bad.len(),
-        p.vertex_count,
         list(&bad)
     );
     let mut wrong = Vec::new();
     for q in 0..p.quad_count {
-        let (first, six) = quad_indices(&packed.patches, &p, q);
-        let got = &indices[first as usize..first as usize + 6];
+        let (in_grid, first, six) = quad_indices(headers, &p, q);
+        if !in_grid {
+            continue;
+        }
+        quads += 1;
+        let got = &w.indices[first as usize..first as usize + 6];
         if got != six {
             wrong.push((q, got.to_vec(), six));
         }
     }
-    ensure!(wrong.is_empty(), "nurbs_tessellation: {} of {} quads' indices differ (quad, gpu, cpu):\n{}", wrong.len(), p.quad_count, list(&wrong));
+    ensure!(wrong.is_empty(), "nurbs_tessellation ({what}): {} of {quads} quads' indices differ (quad, gpu, cpu):\n{}", wrong.len(), list(&wrong));
+    Ok((worst_pos, worst_normal, worst_uv, vertices, quads))
+}
+
+/// Fixed levels, then adaptive levels (patches relative to a camera, levels and draw arguments
+/// against `tessellation::adaptive_level` / `draw_args`; a level may be one off only where the
+/// CPU's own level changes within 0.1 % of the tolerance, a rounding tie of the `⌈⌉`).
+pub fn nurbs_tessellation(gpu: &Gpu) -> Result<Report> {
+    let patches = patches();
+    let pack = |origin: DVec3, adaptive: bool| -> Result<NurbsBuffers> {
+        let mut b = NurbsBuffers { vertices: FIRST_VERTEX, indices: FIRST_INDEX, ..NurbsBuffers::default() };
+        for (p, level) in &patches {
+            p.validate("parity patch")?;
+            b.push_relative(p, if adaptive { ADAPTIVE_MAX_LEVEL } else { *level }, origin);
+        }
+        Ok(b)
+    };
+    let fixed = pack(DVec3::ZERO, false)?;
+    let w = run(gpu, &fixed, None)?;
+    let (pos, nrm, uv, mut vertices, mut quads) = compare(&fixed, &fixed.patches, &w, "fixed levels")?;
+
+    let adaptive = pack(DVec3::new(2.0, 3.0, 14.0), true)?;
+    let l = TessLevelParams { patch_count: patches.len() as u32, max_level: ADAPTIVE_MAX_LEVEL, pixel_scale: 300.0, tolerance: 0.5, near: 0.1, _pad: [0; 3] };
+    let w = run(gpu, &adaptive, Some(l))?;
+    let (knots, cps) = (&adaptive.knots, &adaptive.control_points);
+    let level_at = |h: &NurbsPatchGpu, tolerance: f32| {
+        adaptive_level(h, &TessLevelParams { tolerance, ..l }, |i| knots[i as usize], |i| Vec4::from_array(cps[i as usize]))
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for (k, (h, g)) in adaptive.patches.iter().zip(&w.headers).enumerate() {
+        let cpu = level_at(h, l.tolerance);
+        let tie = [l.tolerance * (1.0 - 1e-3), l.tolerance * (1.0 + 1e-3)].map(|t| level_at(h, t));
+        ensure!(
+            g.level == cpu || tie.contains(&g.level),
+            "nurbs_levels: patch {k}: GPU level {}, CPU {cpu} (within 0.1 % of the tolerance: {tie:?})",
+            g.level
+        );
+        let args = &w.args[(DRAW_ARGS_WORDS as usize) * k..(DRAW_ARGS_WORDS as usize) * (k + 1)];
+        ensure!(args == draw_args(h, g.level), "nurbs_levels: patch {k}: draw arguments {args:?}, want {:?}", draw_args(h, g.level));
+        ensure!(NurbsPatchGpu { level: h.level, ..*g } == *h, "nurbs_levels: patch {k}: the header changed beyond its level");
+        seen.insert(g.level);
+    }
+    ensure!(
+        seen.len() >= 4 && seen.contains(&1) && seen.contains(&ADAPTIVE_MAX_LEVEL),
+        "nurbs_levels: the test patches should take several levels, 1 (the flat square) and the largest among them: {seen:?}"
+    );
+    let (apos, anrm, auv, av, aq) = compare(&adaptive, &w.headers, &w, "adaptive levels")?;
+    vertices += av;
+    quads += aq;
     Ok(Report {
         kernel: "nurbs_tessellation".into(),
-        cases: (p.vertex_count + p.quad_count) as usize,
+        cases: (vertices + quads) as usize + patches.len(),
         detail: format!(
-            "{} patches; indices equal; worst position {worst_pos:.1}·ρ ULP of the patch scale (bound {POSITION_ULPS}·ρ), normal {worst_normal:.1} ULP of 1 \
-             (bound {NORMAL_ULPS}), uv {worst_uv} ULP (bound {UV_ULPS})",
-            patches.len()
+            "{} patches, fixed and adaptive levels ({} distinct); indices equal, levels equal or a tie; worst position {:.1}·ρ ULP of the patch scale \
+             (bound {POSITION_ULPS}·ρ), normal {:.1} ULP of 1 (bound {NORMAL_ULPS}), uv {} ULP (bound {UV_ULPS})",
+            patches.len(),
+            seen.len(),
+            pos.max(apos),
+            nrm.max(anrm),
+            uv.max(auv)
         ),
     })
 }

@@ -22,6 +22,10 @@ pub struct Draw {
     pub params: DrawParams,
     pub albedo_texture: Option<u32>,
     pub mask_texture: Option<u32>,
+    /// Drawn with the arguments a kernel wrote, number `k` of [`Geometry::indirect_args`]
+    /// (adaptive NURBS levels: the G-buffer draws the current grid; `first_index` and
+    /// `index_count` then span the patch's whole slot).
+    pub indirect: Option<u32>,
 }
 
 impl Draw {
@@ -96,6 +100,9 @@ pub struct Geometry {
     pub draws: Vec<Draw>,
     /// Draws of transparent materials (opacity below 1), in scene order: the transparent pass's.
     pub transparent: Vec<Draw>,
+    /// Indirect draw arguments of the draws that have them ([`Draw::indirect`]), written by
+    /// kernels each frame (`nurbs.rs`, adaptive levels); `None` without such draws.
+    pub indirect_args: Option<Buffer>,
 }
 
 impl Geometry {
@@ -125,11 +132,12 @@ impl Geometry {
             indices: Buffer::indices_reserving(ctx, "indices", indices, extra[1])?,
             draws,
             transparent,
+            indirect_args: None,
         })
     }
 
     pub fn bytes(&self) -> u64 {
-        self.positions.size + self.normals.size + self.uvs.size + self.indices.size
+        self.positions.size + self.normals.size + self.uvs.size + self.indices.size + self.indirect_args.as_ref().map_or(0, |b| b.size)
     }
 
     /// The vertex stage's storage buffers of every raster pass: positions, normals, uvs, camera.
@@ -197,7 +205,11 @@ pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Text
     for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
         let variant = draw.variant();
         let bindings: Vec<Binding<'_>> = geo.vertex_bindings(camera).chain(textures.bindings_of(draw, variant)).collect();
-        rec.draw_indexed(&gpu.raster.gbuffer[t.normal_target][variant], &bindings, &draw.params, draw.first_index, draw.index_count)?;
+        let pipe = &gpu.raster.gbuffer[t.normal_target][variant];
+        match (draw.indirect, &geo.indirect_args) {
+            (Some(k), Some(args)) => rec.draw_indexed_indirect(pipe, &bindings, &draw.params, args, k)?,
+            _ => rec.draw_indexed(pipe, &bindings, &draw.params, draw.first_index, draw.index_count)?,
+        }
     }
     rec.end_rendering();
     for img in [&t.normal, &t.albedo] {

@@ -132,6 +132,8 @@ pub struct SceneInput<'a> {
     pub material_names: Vec<String>,
     /// NURBS patches, tessellated on the GPU each frame into the geometry buffers ([`nurbs`]).
     pub nurbs: Vec<nurbs::NurbsDraw<'a>>,
+    /// Adaptive NURBS levels within this many pixels of the surface (`None`: each patch's level).
+    pub nurbs_tolerance: Option<f32>,
 }
 
 /// How to render.
@@ -260,7 +262,7 @@ pub fn render(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Frame> 
     let n = s.width * s.height;
     let lights_view = lights_to_view(&scene.view, scene.lights)?;
     let positions = scene.view.relative_positions(scene.positions);
-    let (geometry, tessellation, indices) = nurbs::upload_geometry(ctx, scene, &positions).context("uploading geometry")?;
+    let (geometry, tessellation, indices) = nurbs::upload_geometry(ctx, scene, &positions, s).context("uploading geometry")?;
     if !geometry.transparent.is_empty() && !s.technique.draws_transparency() {
         bail!("{}", transparent::refusal(s.technique, &geometry.transparent, &scene.material_names, &scene.materials));
     }

@@ -21,6 +21,15 @@
 //! 4. **Barrier**: the kernels' writes become visible to the vertex stage's storage reads and to
 //!    index reads (`Recorder::draws_read_kernel_writes`), before the G-buffer pass.
 //!
+//! **Adaptive levels** (`render --tess-error PIXELS`, [`SceneInput::nurbs_tolerance`]): each
+//! patch's slot holds its grid at [`ADAPTIVE_MAX_LEVEL`]; before step 2 a kernel
+//! (`shaders::tessellation::nurbs_levels`, one invocation per patch) picks the level at which
+//! the grid stays within the tolerance on screen from the patch's second-derivative control
+//! points and its distance, writes it into the patch's header (steps 2–3 then fill only that
+//! grid) and writes the patch's `VkDrawIndexedIndirectCommand`; the G-buffer draws the patches
+//! indirectly (`Draw::indirect`). Forward+ (which reverses a CPU copy of the indices) and
+//! transparent patches (the transparent pass draws index ranges) refuse adaptive levels.
+//!
 //! References: L. Piegl & W. Tiller, *The NURBS Book*, 2nd ed. (1997): A2.1 FindSpan, A2.2
 //! BasisFuns, A2.3 DersBasisFuns, A3.6 SurfaceDerivsAlg1 on homogeneous points, A4.3/A4.4
 //! rational surface points and derivatives (`shaders::nurbs` has where each one lives); the
@@ -36,15 +45,18 @@
 //! knots and `16·size_u·size_v` B of control points (the `nurbs` scene: 34 patches, 9.4 KiB); per
 //! grid vertex 32 B in the vertex streams (position 12, normal 12, uv 8), per quad 24 B of
 //! indices (level 16: 9 248 B and 6 144 B per patch). A scene without patches allocates none of
-//! it, records no pass and creates none of its pipelines.
+//! it, records no pass and creates none of its pipelines. Adaptive levels: slots of
+//! [`ADAPTIVE_MAX_LEVEL`] (135 200 B of vertices and 98 304 B of indices per patch) and 20 B of
+//! draw arguments per patch.
 use super::gbuffer::{Draw, Geometry};
-use super::{SceneInput, ViewTransform};
+use super::{SceneInput, Settings, Technique, ViewTransform};
 use crate::gpu::COMPUTE_SPV;
 use crate::scene::nurbs::{NurbsBuffers, NurbsPatch};
 use crate::vk::{Buffer, ComputePipeline, Context, Recorder, ShaderModule, VkResult};
 use anyhow::{bail, Result};
 use shaders::kernels;
-use shaders::layout::TessellationParams;
+use shaders::layout::{TessLevelParams, TessellationParams};
+use shaders::tessellation::DRAW_ARGS_WORDS;
 use shaders::nurbs::{index_count, vertex_count};
 use std::borrow::Cow;
 
@@ -57,20 +69,26 @@ pub struct NurbsDraw<'a> {
     pub draw: Draw,
 }
 
+/// The largest level adaptive tessellation picks: every patch's slot holds that grid.
+pub const ADAPTIVE_MAX_LEVEL: u32 = 64;
+
 /// The patches packed after `first_vertex` vertices and `first_index` indices, relative to the
-/// camera, with each patch's draw over its index range.
-pub fn pack(patches: &[NurbsDraw<'_>], view: &ViewTransform, first_vertex: u32, first_index: u32) -> Result<(NurbsBuffers, Vec<Draw>)> {
-    let vertices: u64 = first_vertex as u64 + patches.iter().map(|p| vertex_count(p.level) as u64).sum::<u64>();
-    let indices: u64 = first_index as u64 + patches.iter().map(|p| index_count(p.level) as u64).sum::<u64>();
+/// camera, with each patch's draw over its index range; `adaptive`: every slot at
+/// [`ADAPTIVE_MAX_LEVEL`] and every draw indirect (patch `k` draws arguments `k`).
+pub fn pack(patches: &[NurbsDraw<'_>], view: &ViewTransform, first_vertex: u32, first_index: u32, adaptive: bool) -> Result<(NurbsBuffers, Vec<Draw>)> {
+    let level_of = |p: &NurbsDraw<'_>| if adaptive { ADAPTIVE_MAX_LEVEL } else { p.level };
+    let vertices: u64 = first_vertex as u64 + patches.iter().map(|p| vertex_count(level_of(p)) as u64).sum::<u64>();
+    let indices: u64 = first_index as u64 + patches.iter().map(|p| index_count(level_of(p)) as u64).sum::<u64>();
     if vertices > u32::MAX as u64 || indices > u32::MAX as u64 {
         bail!("{} NURBS patches tessellate into {vertices} vertices and {indices} indices with the meshes; 32-bit indices address at most {}", patches.len(), u32::MAX);
     }
     let mut b = NurbsBuffers { vertices: first_vertex, indices: first_index, ..NurbsBuffers::default() };
     let draws = patches
         .iter()
-        .map(|p| {
-            let h = b.push_relative(p.patch, p.level, view.eye);
-            Draw { first_index: h.index_offset, index_count: index_count(h.level), ..p.draw }
+        .enumerate()
+        .map(|(k, p)| {
+            let h = b.push_relative(p.patch, level_of(p), view.eye);
+            Draw { first_index: h.index_offset, index_count: index_count(h.level), indirect: adaptive.then_some(k as u32), ..p.draw }
         })
         .collect();
     Ok((b, draws))
@@ -82,7 +100,7 @@ pub fn cpu_indices(mesh: &[u32], packed: &NurbsBuffers, params: &TessellationPar
     let mut all = mesh.to_vec();
     all.resize(packed.indices as usize, 0);
     for q in 0..params.quad_count {
-        let (first, six) = shaders::tessellation::quad_indices(&packed.patches, params, q);
+        let (_, first, six) = shaders::tessellation::quad_indices(&packed.patches, params, q);
         shaders::tessellation::store_quad(&mut all, first, &six);
     }
     all
@@ -92,6 +110,8 @@ pub fn cpu_indices(mesh: &[u32], packed: &NurbsBuffers, params: &TessellationPar
 pub struct Tessellation {
     vertices: ComputePipeline<TessellationParams>,
     indices: ComputePipeline<TessellationParams>,
+    /// Adaptive levels: the level kernel and its parameters.
+    levels: Option<(ComputePipeline<TessLevelParams>, TessLevelParams)>,
     headers: Buffer,
     knots: Buffer,
     control_points: Buffer,
@@ -100,12 +120,14 @@ pub struct Tessellation {
 
 impl Tessellation {
     /// Uploads packed patches (`first_vertex`, `first_index`: where their grids start) and
-    /// creates the pass's pipelines.
-    pub fn new(ctx: &Context, packed: &NurbsBuffers, first_vertex: u32, first_index: u32) -> VkResult<Self> {
+    /// creates the pass's pipelines; `levels`: adaptive levels with these parameters (the
+    /// geometry to record into then has the draw arguments, [`Geometry::indirect_args`]).
+    pub fn new(ctx: &Context, packed: &NurbsBuffers, first_vertex: u32, first_index: u32, levels: Option<TessLevelParams>) -> VkResult<Self> {
         let module = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
         Ok(Self {
             vertices: ComputePipeline::new(ctx, &module, kernels::NURBS_VERTICES)?,
             indices: ComputePipeline::new(ctx, &module, kernels::NURBS_INDICES)?,
+            levels: levels.map(|l| Ok::<_, crate::vk::VkError>((ComputePipeline::new(ctx, &module, kernels::NURBS_LEVELS)?, l))).transpose()?,
             headers: Buffer::from_slice(ctx, "nurbs patches", &packed.patches)?,
             knots: Buffer::from_slice(ctx, "nurbs knots", &packed.knots)?,
             control_points: Buffer::from_slice(ctx, "nurbs control points", &packed.control_points)?,
@@ -113,14 +135,24 @@ impl Tessellation {
         })
     }
 
-    /// Records steps 2–4 into `geometry`'s buffers.
+    /// Records the pass into `geometry`'s buffers: with adaptive levels the level kernel first,
+    /// then steps 2–4.
     pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry) -> VkResult<()> {
         let p = &self.params;
+        if let Some((pipe, l)) = &self.levels {
+            let args = geometry.indirect_args.as_ref().ok_or_else(|| crate::vk::VkError::Kernel { entry: pipe.kernel.entry, what: "no draw-argument buffer in the geometry".into() })?;
+            rec.dispatch_threads(pipe, &[&self.headers, &self.knots, &self.control_points, args], l, [l.patch_count, 1, 1])?;
+        }
         let streams = [&self.headers, &self.knots, &self.control_points, &geometry.positions, &geometry.normals, &geometry.uvs];
         rec.dispatch_linear(&self.vertices, &streams, p, p.vertex_count)?;
         rec.dispatch_linear(&self.indices, &[&self.headers, &geometry.indices], p, p.quad_count)?;
         rec.draws_read_kernel_writes();
         Ok(())
+    }
+
+    /// The patches' headers on the GPU (adaptive levels: the level kernel writes their levels).
+    pub fn headers_mut(&mut self) -> &mut Buffer {
+        &mut self.headers
     }
 
     /// The pass's push constants: where its grids lie.
@@ -148,20 +180,49 @@ pub fn params(packed: &NurbsBuffers, first_vertex: u32, first_index: u32) -> Tes
 
 /// The scene's geometry on the GPU (`positions`: camera-relative), with room for its NURBS
 /// grids, the tessellation pass that writes them (`None` for a scene without patches), and the
-/// merged index list on the CPU (Forward+'s copy).
-pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[f32; 3]]) -> Result<(Geometry, Option<Tessellation>, Cow<'a, [u32]>)> {
+/// merged index list on the CPU (Forward+'s copy; with adaptive levels, which Forward+ refuses,
+/// the meshes' alone).
+pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[f32; 3]], s: &Settings) -> Result<(Geometry, Option<Tessellation>, Cow<'a, [u32]>)> {
     let upload = |draws: &[Draw], extra| Geometry::upload_reserving(ctx, positions, scene.normals, scene.uvs, scene.indices, draws, &scene.materials, extra);
     if scene.nurbs.is_empty() {
         return Ok((upload(&scene.draws, [0, 0])?, None, Cow::Borrowed(scene.indices)));
     }
+    let levels = scene.nurbs_tolerance.map(|tolerance| adaptive_params(scene, s, tolerance)).transpose()?;
     let (first_vertex, first_index) = (u32::try_from(positions.len())?, u32::try_from(scene.indices.len())?);
-    let (packed, nurbs_draws) = pack(&scene.nurbs, &scene.view, first_vertex, first_index)?;
+    let (packed, nurbs_draws) = pack(&scene.nurbs, &scene.view, first_vertex, first_index, levels.is_some())?;
     let (vertices, indices) = (packed.vertices as u64, packed.indices as u64);
     crate::vk::memory::check_range(ctx, "vertex positions with the NURBS grids", 12 * vertices)?;
     crate::vk::memory::check_range(ctx, "indices with the NURBS grids", 4 * indices)?;
     let draws: Vec<Draw> = scene.draws.iter().chain(&nurbs_draws).copied().collect();
-    let geometry = upload(&draws, [vertices - first_vertex as u64, indices - first_index as u64])?;
-    let pass = Tessellation::new(ctx, &packed, first_vertex, first_index)?;
+    let mut geometry = upload(&draws, [vertices - first_vertex as u64, indices - first_index as u64])?;
+    let pass = Tessellation::new(ctx, &packed, first_vertex, first_index, levels)?;
+    if levels.is_some() {
+        geometry.indirect_args = Some(Buffer::storage(ctx, "nurbs draw arguments", 4 * DRAW_ARGS_WORDS as u64 * packed.patches.len() as u64)?);
+        return Ok((geometry, Some(pass), Cow::Borrowed(scene.indices)));
+    }
     let all = cpu_indices(scene.indices, &packed, pass.params());
     Ok((geometry, Some(pass), Cow::Owned(all)))
+}
+
+/// The level kernel's parameters for a frame of `s` (tolerance in pixels), after checking that
+/// the frame can draw adaptive levels: the G-buffer must draw every patch.
+fn adaptive_params(scene: &SceneInput<'_>, s: &Settings, tolerance: f32) -> Result<TessLevelParams> {
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        bail!("--tess-error {tolerance}: the tolerance must be a positive number of pixels");
+    }
+    if s.technique == Technique::ForwardPlus {
+        bail!("--tess-error: {} draws NURBS patches from a CPU copy of the indices; adaptive levels are drawn by the G-buffer's indirect draws (use --tess-level, or another technique)", s.technique.name());
+    }
+    if let Some(p) = scene.nurbs.iter().find(|p| super::gbuffer::is_transparent(&p.draw, &scene.materials)) {
+        let name = scene.material_names.get(p.draw.params.material as usize).map_or("?", |n| n.as_str());
+        bail!("--tess-error: a NURBS patch of transparent material {name:?}: the transparent pass draws fixed levels only (use --tess-level)");
+    }
+    Ok(TessLevelParams {
+        patch_count: scene.nurbs.len() as u32,
+        max_level: ADAPTIVE_MAX_LEVEL,
+        pixel_scale: s.height as f32 / (2.0 * (0.5 * scene.fov_y_radians).tan()),
+        tolerance,
+        near: scene.near,
+        _pad: [0; 3],
+    })
 }

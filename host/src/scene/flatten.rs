@@ -76,6 +76,7 @@ fn draw_of(scene: &Scene, material: u32, materials: usize, normal_precision: Pre
         params: DrawParams { albedo, material: material as u32, normal_precision: normal_precision.code(), _pad: [0; 3] },
         albedo_texture,
         mask_texture,
+        indirect: None,
     }
 }
 
@@ -102,5 +103,6 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
         effects: scene.effects.flags(),
         material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
         nurbs: scene.nurbs.iter().zip(&flat.nurbs_draws).map(|(p, &draw)| NurbsDraw { patch: &p.patch, level: p.level(), draw }).collect(),
+        nurbs_tolerance: None,
     }
 }
