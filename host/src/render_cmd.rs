@@ -106,12 +106,7 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         bail_input!("--time {t} is not a finite number of seconds");
     }
     if let Some(e) = a.tess_error {
-        if !(e.is_finite() && e > 0.0) {
-            bail_input!("--tess-error {e}: the tolerance must be a positive number of pixels");
-        }
-        if a.technique == Technique::ForwardPlus {
-            bail_input!("--tess-error: forward-plus draws NURBS patches from a CPU copy of the indices; adaptive levels need the G-buffer's indirect draws (use --tess-level, or another technique)");
-        }
+        render::nurbs::check_adaptive(a.technique, e).map_err(bad_input)?;
     }
     Ok(())
 }
@@ -185,7 +180,8 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         fp_lists: a.fp_lists,
         oit: a.oit,
     };
-    eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
+    let patches = if scene.nurbs.is_empty() { String::new() } else { format!(", {} NURBS patches", scene.nurbs.len()) };
+    eprintln!("rendering {} ({} triangles{patches}, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;
     if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.frame.width, a.frame.height, render::HEAT_MAX) {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);

@@ -42,7 +42,7 @@
 //! runs ([`cpu_indices`]; `tests/gpu_parity.rs` compares the two).
 //!
 //! Memory: per patch the 48 B header, `4·(size_u + degree_u + 1 + size_v + degree_v + 1)` B of
-//! knots and `16·size_u·size_v` B of control points (the `nurbs` scene: 34 patches, 9.4 KiB); per
+//! knots and `16·size_u·size_v` B of control points (the `nurbs` scene: 34 patches, 13.7 KiB); per
 //! grid vertex 32 B in the vertex streams (position 12, normal 12, uv 8), per quad 24 B of
 //! indices (level 16: 9 248 B and 6 144 B per patch). A scene without patches allocates none of
 //! it, records no pass and creates none of its pipelines. Adaptive levels: slots of
@@ -204,15 +204,23 @@ pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[
     Ok((geometry, Some(pass), Cow::Owned(all)))
 }
 
-/// The level kernel's parameters for a frame of `s` (tolerance in pixels), after checking that
-/// the frame can draw adaptive levels: the G-buffer must draw every patch.
-fn adaptive_params(scene: &SceneInput<'_>, s: &Settings, tolerance: f32) -> Result<TessLevelParams> {
+/// Whether `technique` can draw adaptive levels within `tolerance` pixels (`--tess-error`): a
+/// positive tolerance, and a technique whose patches the G-buffer draws (not Forward+).
+pub fn check_adaptive(technique: Technique, tolerance: f32) -> Result<()> {
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--tess-error {tolerance}: the tolerance must be a positive number of pixels");
     }
-    if s.technique == Technique::ForwardPlus {
-        bail!("--tess-error: {} draws NURBS patches from a CPU copy of the indices; adaptive levels are drawn by the G-buffer's indirect draws (use --tess-level, or another technique)", s.technique.name());
+    if technique == Technique::ForwardPlus {
+        bail!("--tess-error: {} draws NURBS patches from a CPU copy of the indices; adaptive levels are drawn by the G-buffer's indirect draws (use --tess-level, or another technique)", technique.name());
     }
+    Ok(())
+}
+
+/// The level kernel's parameters for a frame of `s` (tolerance in pixels), after checking that
+/// the frame can draw adaptive levels ([`check_adaptive`]; no transparent patch: the transparent
+/// pass draws index ranges).
+fn adaptive_params(scene: &SceneInput<'_>, s: &Settings, tolerance: f32) -> Result<TessLevelParams> {
+    check_adaptive(s.technique, tolerance)?;
     if let Some(p) = scene.nurbs.iter().find(|p| super::gbuffer::is_transparent(&p.draw, &scene.materials)) {
         let name = scene.material_names.get(p.draw.params.material as usize).map_or("?", |n| n.as_str());
         bail!("--tess-error: a NURBS patch of transparent material {name:?}: the transparent pass draws fixed levels only (use --tess-level)");
