@@ -115,10 +115,13 @@ pub struct NurbsDesc {
 impl NurbsDesc {
     /// The patch named `name`, of material index `material`, validated.
     fn patch(&self, name: String, material: u32, materials: usize) -> Result<ScenePatch> {
-        // Default knots only where the degree and size allow them (otherwise validation names those).
+        // Default knots only where the degree and size allow them and the sizes match the control
+        // points given (so a size is bounded by the file); otherwise validation names the field
+        // at fault, which it checks before the knots.
+        let consistent = self.size_u as u64 * self.size_v as u64 == self.control_points.len() as u64;
         let knots = |degree: u32, size: u32, given: &Option<Vec<f32>>| match given {
             Some(k) => k.clone(),
-            None if (1..=shaders::nurbs::MAX_DEGREE).contains(&degree) && size > degree => clamped_uniform(degree, size),
+            None if consistent && (1..=shaders::nurbs::MAX_DEGREE).contains(&degree) && size > degree => clamped_uniform(degree, size),
             None => vec![],
         };
         let patch = NurbsPatch {

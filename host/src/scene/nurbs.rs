@@ -46,15 +46,26 @@ pub struct NurbsPatch {
 
 impl NurbsPatch {
     /// Checks everything the kernels rely on; the error is one line naming the patch and the field.
+    /// Degrees and sizes first, then the lengths they imply (control points, weights, knots),
+    /// then the values.
     pub fn validate(&self, name: &str) -> Result<()> {
         let dirs = [("u", self.degree_u, self.size_u, &self.knots_u), ("v", self.degree_v, self.size_v, &self.knots_v)];
-        for (d, degree, size, knots) in dirs {
+        for (d, degree, size, _) in dirs {
             if degree == 0 || degree > MAX_DEGREE {
                 bail!("NURBS patch {name:?}: degree_{d} is {degree}; it must be 1 to {MAX_DEGREE}");
             }
             if size <= degree {
                 bail!("NURBS patch {name:?}: size_{d} is {size}; degree {degree} needs at least {} control points", degree + 1);
             }
+        }
+        let n = self.size_u as u64 * self.size_v as u64;
+        if self.control_points.len() as u64 != n {
+            bail!("NURBS patch {name:?}: control_points has {} points; size_u · size_v = {n} needed", self.control_points.len());
+        }
+        if self.weights.len() as u64 != n {
+            bail!("NURBS patch {name:?}: weights has {} values; size_u · size_v = {n} needed", self.weights.len());
+        }
+        for (d, degree, size, knots) in dirs {
             let want = size as u64 + degree as u64 + 1;
             if knots.len() as u64 != want {
                 bail!("NURBS patch {name:?}: knots_{d} has {} values; size_{d} + degree_{d} + 1 = {want} needed", knots.len());
@@ -69,13 +80,6 @@ impl NurbsPatch {
             if hi <= lo {
                 bail!("NURBS patch {name:?}: the {d} domain knots_{d}[{degree}..={size}] = [{lo}, {hi}] has zero length");
             }
-        }
-        let n = self.size_u as u64 * self.size_v as u64;
-        if self.control_points.len() as u64 != n {
-            bail!("NURBS patch {name:?}: control_points has {} points; size_u · size_v = {n} needed", self.control_points.len());
-        }
-        if self.weights.len() as u64 != n {
-            bail!("NURBS patch {name:?}: weights has {} values; size_u · size_v = {n} needed", self.weights.len());
         }
         if let Some(i) = self.control_points.iter().position(|p| !Vec3::from_array(*p).is_finite()) {
             bail!("NURBS patch {name:?}: control_points[{i}] = {:?} is not finite", self.control_points[i]);

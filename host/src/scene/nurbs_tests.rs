@@ -214,6 +214,8 @@ fn description_patches_load_and_bad_ones_are_named() {
         (good.replace("size_u = 3", "size_u = 2"), "size_u is 2; degree 2 needs at least 3"),
         (good.replace("level = 3", "level = 0"), "level is 0; it must be 1 to 256"),
         (good.replace("level = 3", "level = 257"), "level is 257"),
+        // Sizes that do not match the points: no default knots are built for them.
+        (good.replace("size_u = 3", "size_u = 4000000000"), "control_points has 6 points; size_u · size_v = 8000000000 needed"),
     ];
     for (body, want) in cases {
         let e = description_err(&table(&body));
