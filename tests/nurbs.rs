@@ -181,6 +181,16 @@ fn adaptive_levels_equal_the_reference_and_a_fine_tessellation() {
     glassy.materials[3].opacity = 0.5;
     let e = format!("{:#}", adaptive(&gpu, &glassy, &l, &s(Technique::Deferred), 0.5).err().expect("transparent patches refuse adaptive levels"));
     assert!(e.contains("--tess-error") && e.contains("\"gold\"") && !e.contains('\n'), "{e}");
+    if gpu.ctx.info.is_llvmpipe() {
+        // A patch past the level kernel's loops on lavapipe is refused, not cut short.
+        let (nu, nv) = (129u32, 125u32);
+        let points = (0..nu * nv).map(|k| [(k % nu) as f32 * 0.01, 0.5, -((k / nu) as f32) * 0.01]).collect();
+        let big = host::scene::nurbs::NurbsPatch::polynomial(1, 1, nu, nv, points, 0);
+        let mut scene = nurbs_scene();
+        scene.add_nurbs([host::scene::nurbs::ScenePatch { name: "big".into(), patch: big, level: None }]);
+        let e = format!("{:#}", adaptive(&gpu, &scene, &l, &s(Technique::Deferred), 0.5).err().expect("too many control points for lavapipe's loops"));
+        assert!(e.contains("16125 control points") && e.contains("16000") && !e.contains('\n'), "{e}");
+    }
     common::assert_clean(&gpu);
 }
 

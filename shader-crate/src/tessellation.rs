@@ -222,6 +222,12 @@ pub const fn draw_args(patch: &NurbsPatchGpu, level: u32) -> [u32; 5] {
     [nurbs::index_count(level), 1, patch.index_offset, 0, 0]
 }
 
+/// The most control points of one patch [`adaptive_level`] may loop over on llvmpipe, whose loop
+/// limiter stops an invocation's loops after 65 535 iterations in all and silently drops the
+/// rest: its loops take `3·n + size_v ≤ 4·n` iterations for `n` control points (the host refuses
+/// adaptive levels for larger patches there).
+pub const MAX_ADAPTIVE_CONTROL_POINTS_LLVMPIPE: u32 = 16_000;
+
 /// Words of one patch's indirect draw arguments.
 pub const DRAW_ARGS_WORDS: u32 = 5;
 

@@ -187,7 +187,7 @@ pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[
     if scene.nurbs.is_empty() {
         return Ok((upload(&scene.draws, [0, 0])?, None, Cow::Borrowed(scene.indices)));
     }
-    let levels = scene.nurbs_tolerance.map(|tolerance| adaptive_params(scene, s, tolerance)).transpose()?;
+    let levels = scene.nurbs_tolerance.map(|tolerance| adaptive_params(scene, s, tolerance, ctx.info.is_llvmpipe())).transpose()?;
     let (first_vertex, first_index) = (u32::try_from(positions.len())?, u32::try_from(scene.indices.len())?);
     let (packed, nurbs_draws) = pack(&scene.nurbs, &scene.view, first_vertex, first_index, levels.is_some())?;
     let (vertices, indices) = (packed.vertices as u64, packed.indices as u64);
@@ -218,9 +218,16 @@ pub fn check_adaptive(technique: Technique, tolerance: f32) -> Result<()> {
 
 /// The level kernel's parameters for a frame of `s` (tolerance in pixels), after checking that
 /// the frame can draw adaptive levels ([`check_adaptive`]; no transparent patch: the transparent
-/// pass draws index ranges).
-fn adaptive_params(scene: &SceneInput<'_>, s: &Settings, tolerance: f32) -> Result<TessLevelParams> {
+/// pass draws index ranges; on llvmpipe no patch past its loop limit).
+fn adaptive_params(scene: &SceneInput<'_>, s: &Settings, tolerance: f32, llvmpipe: bool) -> Result<TessLevelParams> {
     check_adaptive(s.technique, tolerance)?;
+    let limit = shaders::tessellation::MAX_ADAPTIVE_CONTROL_POINTS_LLVMPIPE;
+    if let Some(p) = scene.nurbs.iter().find(|p| llvmpipe && p.patch.control_points.len() > limit as usize) {
+        bail!(
+            "--tess-error: a NURBS patch of {} control points: lavapipe's loop limiter ends a shader's loops after 65 535 iterations, so the level kernel takes patches of at most {limit} there (use --tess-level, or a GPU)",
+            p.patch.control_points.len()
+        );
+    }
     if let Some(p) = scene.nurbs.iter().find(|p| super::gbuffer::is_transparent(&p.draw, &scene.materials)) {
         let name = scene.material_names.get(p.draw.params.material as usize).map_or("?", |n| n.as_str());
         bail!("--tess-error: a NURBS patch of transparent material {name:?}: the transparent pass draws fixed levels only (use --tess-level)");
