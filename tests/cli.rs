@@ -69,6 +69,17 @@ fn devices_lists_at_least_one_usable_device() {
     assert!(out.lines().any(|l| l.contains("subgroup") && !l.contains("unusable")), "{out}");
 }
 
+/// `MANYLIGHTS_VALIDATION` takes the usual spellings of a switch (the README writes `=1`); a
+/// value that is none is a bad-input error naming it.
+#[test]
+fn the_validation_variable_takes_1_and_0() {
+    for v in ["1", "0", "yes", "off"] {
+        let run = manylights_env(["devices"], &[("MANYLIGHTS_VALIDATION", v)]);
+        assert!(run.ok, "MANYLIGHTS_VALIDATION={v}: {}", run.stderr);
+    }
+    refused(&["devices"], &[("MANYLIGHTS_VALIDATION", "maybe")], BAD_INPUT, &["maybe"]);
+}
+
 #[test]
 fn render_writes_png_and_stats() {
     let dir = TempDir::new("cli-stats");

@@ -134,7 +134,7 @@ impl Drop for Workspace {
 /// Whether an error message says where: a line, a key, or the item of the scene at fault.
 fn names_a_place(msg: &str) -> bool {
     let line = msg.match_indices(" line ").any(|(i, _)| msg[i + 6..].starts_with(|c: char| c.is_ascii_digit()));
-    let keys = ["geometry", "name", "camera", "lights", "light[", "[[light]]", "material[", "mtl_d_zero_is_opaque", "effects", "distribution", "count"];
+    let keys = ["geometry", "name", "camera", "lights", "light[", "[[light]]", "material[", "mtl_d_zero_is_opaque", "effects", "distribution", "count", "nurbs["];
     let items = ["not found", "cannot read", "mesh ", "light ", "material ", "texture ", "spans ", "triangle", "materials"];
     line || keys.iter().chain(&items).any(|k| msg.contains(k))
 }

@@ -50,6 +50,13 @@ fn workgroup_scan_at_device_width() {
     check(parity::workgroup_scan);
 }
 
+/// The NURBS tessellation pass: vertex streams within the documented ULP bounds of the CPU
+/// kernel functions, indices equal (`host::parity::nurbs_tessellation`).
+#[test]
+fn nurbs_tessellation() {
+    check(parity::nurbs_tessellation);
+}
+
 /// The debug frame (all kernels' functions composed) matches its CPU rendering: identical except
 /// for pixels where GPU `sqrt`/division rounding flips a silhouette or an 8-bit colour step.
 /// The octa-error view is the amplified difference of two rounding errors (a 1e-4 rad angle over

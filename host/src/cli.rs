@@ -28,7 +28,8 @@ pub struct DeviceArgs {
     #[arg(long, global = true, env = "MANYLIGHTS_DEVICE")]
     pub device: Option<String>,
     /// Enable the Khronos validation layer (+ synchronization validation); any message fails the run.
-    #[arg(long, global = true, env = "MANYLIGHTS_VALIDATION")]
+    /// The variable takes 1/0, true/false, yes/no, on/off.
+    #[arg(long, global = true, env = "MANYLIGHTS_VALIDATION", value_parser = clap::builder::BoolishValueParser::new())]
     pub validation: bool,
 }
 

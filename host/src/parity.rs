@@ -18,6 +18,8 @@ mod octa;
 pub use octa::{octahedral, octahedral_inputs};
 mod morton;
 pub use self::morton::morton_codes;
+mod nurbs;
+pub use self::nurbs::nurbs_tessellation;
 
 /// Outcome of one parity check.
 #[derive(Clone, Debug)]
@@ -43,6 +45,7 @@ pub fn run_all(gpu: &Gpu) -> Result<Vec<Report>> {
     r.push(cluster_keys(gpu)?);
     r.push(morton_codes(gpu)?);
     r.push(workgroup_scan(gpu)?);
+    r.push(nurbs_tessellation(gpu)?);
     Ok(r)
 }
 

@@ -24,7 +24,7 @@ pub const MAX_FRAMES: u32 = 100_000;
 /// Arguments of `render` (see `manylights render --help`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Built-in scene (city, corridor, glass, sponza, bunny; `name@view` for a named camera view:
+    /// Built-in scene (city, corridor, glass, nurbs, sponza, bunny; `name@view` for a named camera view:
     /// city@corner, sponza@column, glass@stack), a .toml description, or an .obj, .gltf or .glb file.
     #[arg(long, default_value = "city")]
     pub scene: String,
@@ -76,6 +76,15 @@ pub struct RenderArgs {
     /// the scene's camera position and direction.
     #[arg(long, value_parser = crate::scene::bookmark::parse_arg, allow_hyphen_values = true)]
     pub camera: Option<crate::scene::bookmark::Bookmark>,
+    /// Tessellation level of every NURBS patch: quads along each parameter direction (default:
+    /// each patch's own `level`, else 16).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=crate::scene::nurbs::MAX_TESS_LEVEL as i64))]
+    pub tess_level: Option<u32>,
+    /// Adaptive NURBS tessellation: each patch's level picked on the GPU every frame so that its
+    /// triangles stay within this many pixels of the surface (levels 1 to 64; not with
+    /// forward-plus, nor with transparent patches).
+    #[arg(long, allow_negative_numbers = true)]
+    pub tess_error: Option<f32>,
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
@@ -99,6 +108,9 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
     if let Some(t) = a.time.filter(|t| !t.is_finite()) {
         bail_input!("--time {t} is not a finite number of seconds");
+    }
+    if let Some(e) = a.tess_error {
+        render::nurbs::check_adaptive(a.technique, e).map_err(bad_input)?;
     }
     Ok(())
 }
@@ -151,10 +163,14 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     if let Some(t) = a.time {
         scene.lights = lights::animate(&scene.lights, t);
     }
+    if let Some(level) = a.tess_level {
+        scene.set_tess_level(level);
+    }
     scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
     check_scene(gpu, a, &scene)?;
     let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
-    let input = scene_input(&scene, &flat, &scene.lights);
+    let mut input = scene_input(&scene, &flat, &scene.lights);
+    input.nurbs_tolerance = a.tess_error;
     let settings = Settings {
         width: a.frame.width,
         height: a.frame.height,
@@ -171,7 +187,8 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         fp_lists: a.fp_lists,
         oit: a.oit,
     };
-    eprintln!("rendering {} ({} triangles, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
+    let patches = if scene.nurbs.is_empty() { String::new() } else { format!(", {} NURBS patches", scene.nurbs.len()) };
+    eprintln!("rendering {} ({} triangles{patches}, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;
     if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.frame.width, a.frame.height, render::HEAT_MAX) {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);

@@ -83,6 +83,14 @@ pub const INDIRECT_ARGS: Kernel<IndirectParams> = Kernel::new("entries::indirect
 /// The grand total of a scan over a GPU-counted prefix (`render::scan`, `entries.rs`).
 pub const SCAN_COUNTED_TOTAL: Kernel<CountedTotalParams> = Kernel::new("entries::scan_counted_total", 3, [1, 1, 1], false);
 
+// NURBS tessellation pass (`tessellation.rs`): one invocation per grid vertex, one per quad.
+/// Headers, knots, control points, positions, normals, uvs.
+pub const NURBS_VERTICES: Kernel<TessellationParams> = linear("tessellation::nurbs_vertices", 6);
+/// Headers, indices.
+pub const NURBS_INDICES: Kernel<TessellationParams> = linear("tessellation::nurbs_indices", 2);
+/// Adaptive levels, one invocation per patch: headers, knots, control points, draw arguments.
+pub const NURBS_LEVELS: Kernel<TessLevelParams> = Kernel::new("tessellation::nurbs_levels", 4, [64, 1, 1], false);
+
 // Radix sort (`entries.rs`, `radix.rs`): cooperative (barriers, ballots).
 const fn radix<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
     Kernel::new(entry, storage_buffers, [crate::radix::SORT_WORKGROUP, 1, 1], true)
@@ -164,6 +172,9 @@ pub const ALL: &[Kernel<()>] = &[
     SCAN_STORE_TOTAL.erased(),
     INDIRECT_ARGS.erased(),
     SCAN_COUNTED_TOTAL.erased(),
+    NURBS_VERTICES.erased(),
+    NURBS_INDICES.erased(),
+    NURBS_LEVELS.erased(),
     RADIX_HISTOGRAM.erased(),
     RADIX_UPSWEEP.erased(),
     RADIX_SPINE.erased(),

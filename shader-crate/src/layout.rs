@@ -621,3 +621,39 @@ pub struct NurbsPatchGpu {
     pub _pad: u32,
 }
 const _: () = assert!(core::mem::size_of::<NurbsPatchGpu>() == 48);
+
+/// Push constants of the tessellation kernels (`crate::tessellation`): the patches' headers are
+/// `patch_count` entries of the header buffer, sorted by their vertex and index offsets; the
+/// grids fill the vertex streams from `first_vertex` (`vertex_count` vertices) and the index
+/// buffer from `first_index` (`quad_count` quads of six indices), without gaps.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TessellationParams {
+    pub patch_count: u32,
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub quad_count: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TessellationParams>() == 32);
+
+/// Push constants of the adaptive level kernel (`crate::tessellation::nurbs_levels`): each of
+/// `patch_count` patches gets the level (1..=`max_level`) at which its grid stays within
+/// `tolerance` pixels of the surface, its control points being camera-relative and the frame
+/// `pixel_scale = height / (2·tan(fov_y / 2))` pixels per unit of size at unit distance.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TessLevelParams {
+    pub patch_count: u32,
+    pub max_level: u32,
+    pub pixel_scale: f32,
+    /// Pixels, > 0.
+    pub tolerance: f32,
+    /// The near plane: the smallest distance the estimate divides by.
+    pub near: f32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TessLevelParams>() == 32);

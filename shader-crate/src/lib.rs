@@ -19,7 +19,9 @@
 //! * [`debug_view`] — an analytic test scene for debug frames (normals, keys, encoding error).
 //! * [`lighting`] — culling tests, falloff, BRDF, tonemapping and output encoding.
 //! * [`nurbs`] — rational B-spline surfaces: knot spans, basis functions and derivatives, rational
-//!   surface points and normals, the per-vertex / per-quad tessellation of a patch.
+//!   surface points and normals, the per-vertex / per-quad tessellation of a patch; the
+//!   tessellation pass's kernels ([`tessellation`]) write every patch's grid into the raster
+//!   passes' vertex streams and index buffer.
 //! * [`oit`] — order-independent transparency: per-pixel linked lists (list building, exact and
 //!   k-nearest resolves) and weighted blended OIT; the transparent pass's fragment shaders
 //!   ([`raster_transparent`], graphics module) and its resolve kernel ([`transparency`]).
@@ -125,6 +127,8 @@ pub mod sort_inputs;
 mod test_support;
 #[cfg(feature = "compute")]
 pub mod tile_cull;
+#[cfg(feature = "compute")]
+pub mod tessellation;
 #[cfg(feature = "compute")]
 pub mod tiled;
 #[cfg(feature = "compute")]

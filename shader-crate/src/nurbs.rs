@@ -59,11 +59,12 @@
 //! two counter-clockwise triangles ([`tessellate_indices`]): with u to the right and v up, seen
 //! from the side the normal points to, so the triangle winding and the normals agree.
 //!
-//! What the tessellation pass will do with it (not wired yet): one compute dispatch over every
-//! patch's vertices writes positions, normals and uvs into the flat `f32` vertex streams the
-//! G-buffer pass pulls from (`raster::gbuffer_vs`), at `NurbsPatchGpu::vertex_offset`, and one
-//! over every patch's quads writes the index buffer at `index_offset` (indices plus the patch's
-//! `vertex_offset`); the G-buffer pass then draws the patches as ordinary meshes.
+//! The tessellation pass ([`crate::tessellation`], recorded by `host::render::nurbs`): one
+//! compute dispatch over every patch's vertices writes positions, normals and uvs into the flat
+//! `f32` vertex streams the G-buffer pass pulls from (`raster::gbuffer_vs`), at
+//! `NurbsPatchGpu::vertex_offset`, and one over every patch's quads writes the index buffer at
+//! `index_offset` (indices plus the patch's `vertex_offset`); the raster passes then draw the
+//! patches as ordinary meshes.
 //!
 //! # Memory
 //!

@@ -22,6 +22,10 @@ pub struct Draw {
     pub params: DrawParams,
     pub albedo_texture: Option<u32>,
     pub mask_texture: Option<u32>,
+    /// Drawn with the arguments a kernel wrote, number `k` of [`Geometry::indirect_args`]
+    /// (adaptive NURBS levels: the G-buffer draws the current grid; `first_index` and
+    /// `index_count` then span the patch's whole slot).
+    pub indirect: Option<u32>,
 }
 
 impl Draw {
@@ -96,24 +100,44 @@ pub struct Geometry {
     pub draws: Vec<Draw>,
     /// Draws of transparent materials (opacity below 1), in scene order: the transparent pass's.
     pub transparent: Vec<Draw>,
+    /// Indirect draw arguments of the draws that have them ([`Draw::indirect`]), written by
+    /// kernels each frame (`nurbs.rs`, adaptive levels); `None` without such draws.
+    pub indirect_args: Option<Buffer>,
 }
 
 impl Geometry {
     /// Uploads the merged buffers and splits `draws` by their material's opacity (`materials`).
     pub fn upload(ctx: &Context, positions: &[[f32; 3]], normals: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u32], draws: &[Draw], materials: &[MaterialGpu]) -> VkResult<Self> {
+        Self::upload_reserving(ctx, positions, normals, uvs, indices, draws, materials, [0, 0])
+    }
+
+    /// [`Geometry::upload`] with room for `extra[0]` more vertices and `extra[1]` more indices
+    /// after the uploaded ones, which kernels write (the NURBS tessellation pass, `nurbs.rs`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn upload_reserving(
+        ctx: &Context,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        uvs: &[[f32; 2]],
+        indices: &[u32],
+        draws: &[Draw],
+        materials: &[MaterialGpu],
+        extra: [u64; 2],
+    ) -> VkResult<Self> {
         let (transparent, draws) = draws.iter().copied().filter(|d| d.index_count > 0).partition(|d| is_transparent(d, materials));
         Ok(Self {
-            positions: Buffer::from_slice(ctx, "positions", positions)?,
-            normals: Buffer::from_slice(ctx, "normals", normals)?,
-            uvs: Buffer::from_slice(ctx, "uvs", uvs)?,
-            indices: Buffer::indices(ctx, "indices", indices)?,
+            positions: Buffer::from_slice_reserving(ctx, "positions", positions, extra[0])?,
+            normals: Buffer::from_slice_reserving(ctx, "normals", normals, extra[0])?,
+            uvs: Buffer::from_slice_reserving(ctx, "uvs", uvs, extra[0])?,
+            indices: Buffer::indices_reserving(ctx, "indices", indices, extra[1])?,
             draws,
             transparent,
+            indirect_args: None,
         })
     }
 
     pub fn bytes(&self) -> u64 {
-        self.positions.size + self.normals.size + self.uvs.size + self.indices.size
+        self.positions.size + self.normals.size + self.uvs.size + self.indices.size + self.indirect_args.as_ref().map_or(0, |b| b.size)
     }
 
     /// The vertex stage's storage buffers of every raster pass: positions, normals, uvs, camera.
@@ -181,7 +205,11 @@ pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Text
     for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
         let variant = draw.variant();
         let bindings: Vec<Binding<'_>> = geo.vertex_bindings(camera).chain(textures.bindings_of(draw, variant)).collect();
-        rec.draw_indexed(&gpu.raster.gbuffer[t.normal_target][variant], &bindings, &draw.params, draw.first_index, draw.index_count)?;
+        let pipe = &gpu.raster.gbuffer[t.normal_target][variant];
+        match (draw.indirect, &geo.indirect_args) {
+            (Some(k), Some(args)) => rec.draw_indexed_indirect(pipe, &bindings, &draw.params, args, k)?,
+            _ => rec.draw_indexed(pipe, &bindings, &draw.params, draw.first_index, draw.index_count)?,
+        }
     }
     rec.end_rendering();
     for img in [&t.normal, &t.albedo] {

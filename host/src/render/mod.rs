@@ -38,6 +38,7 @@ pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
+pub mod nurbs;
 pub mod reference;
 pub mod renderer;
 pub mod scan;
@@ -133,6 +134,10 @@ pub struct SceneInput<'a> {
     pub effects: u32,
     /// Material names (by material index; may be shorter than `materials`), for messages.
     pub material_names: Vec<String>,
+    /// NURBS patches, tessellated on the GPU each frame into the geometry buffers ([`nurbs`]).
+    pub nurbs: Vec<nurbs::NurbsDraw<'a>>,
+    /// Adaptive NURBS levels within this many pixels of the surface (`None`: each patch's level).
+    pub nurbs_tolerance: Option<f32>,
 }
 
 /// How to render.

@@ -35,6 +35,8 @@ struct Resources {
     fov_y_radians: f32,
     near: f32,
     geometry: gbuffer::Geometry,
+    /// The NURBS tessellation pass (scenes with patches), recorded before the G-buffer.
+    tessellation: Option<super::nurbs::Tessellation>,
     indices: Vec<u32>,
     textures: gbuffer::Textures,
     camera: Buffer,
@@ -71,13 +73,15 @@ impl Resources {
 
     /// The buffers the frame loop owns, by name and bytes.
     fn buffers(&self) -> Vec<(String, u64)> {
-        vec![
+        let mut v = vec![
             ("geometry".into(), self.geometry.bytes()),
             ("textures".into(), self.textures.bytes()),
             ("gbuffer".into(), self.targets.bytes()),
             ("lights".into(), self.lights.size),
             ("frame".into(), self.frame.size),
-        ]
+        ];
+        v.extend(self.tessellation.iter().flat_map(|t| t.buffers()));
+        v
     }
 
     /// Creates the technique of `settings` (refusing scenes with transparent materials where it
@@ -142,8 +146,7 @@ impl Renderer {
         let n = s.width * s.height;
         let lights_view = lights_to_view(&scene.view, scene.lights)?;
         let positions = scene.view.relative_positions(scene.positions);
-        let geometry = gbuffer::Geometry::upload(ctx, &positions, scene.normals, scene.uvs, scene.indices, &scene.draws, &scene.materials)
-            .context("uploading geometry")?;
+        let (geometry, tessellation, indices) = super::nurbs::upload_geometry(ctx, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
         let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
         let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
@@ -172,7 +175,8 @@ impl Renderer {
             fov_y_radians: scene.fov_y_radians,
             near: scene.near,
             geometry,
-            indices: scene.indices.to_vec(),
+            tessellation,
+            indices: indices.into_owned(),
             textures,
             camera,
             targets,
@@ -224,9 +228,14 @@ impl Renderer {
                 Some(&mut self.profiler),
                 Some(&mut self.async_profiler),
                 |rec| tech.record_async(gpu, rec, &inputs),
-                |rec| match tech.uses_gbuffer() {
-                    true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets)),
-                    false => Ok(()),
+                |rec| {
+                    if let Some(t) = &res.tessellation {
+                        rec.pass("tessellation", |rec| t.record(rec, &res.geometry))?;
+                    }
+                    match tech.uses_gbuffer() {
+                        true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets)),
+                        false => Ok(()),
+                    }
                 },
                 |rec| tech.record(gpu, rec, &inputs),
             )?;
@@ -254,6 +263,9 @@ impl Renderer {
         let r = &mut self.res;
         r.view = view;
         r.geometry.positions.write(&view.relative_positions(world_positions)).context("uploading vertices")?;
+        if let Some(t) = &mut r.tessellation {
+            t.set_eye(view.eye).context("uploading the NURBS control points")?;
+        }
         let aspect = r.settings.width as f32 / r.settings.height as f32;
         r.camera.write(&[gbuffer::raster_camera(view.rotation(), r.fov_y_radians, aspect, r.near)])?;
         self.set_lights(gpu, world_lights)

@@ -37,14 +37,31 @@
 //! specular = false
 //! textures = true
 //! alpha_test = true
+//! [[nurbs]]                       # optional, repeatable: a rational B-spline patch (world space)
+//! degree_u = 2                    # 1 to 5
+//! degree_v = 1
+//! size_u = 3                      # control points along u (at least degree_u + 1)
+//! size_v = 2
+//! control_points = [[0, 0, 0], [1, 0, 1], [2, 0, 0], [0, 1, 0], [1, 1, 1], [2, 1, 0]]  # u fastest
+//! weights = [1, 0.7071, 1, 1, 0.7071, 1]  # optional, positive, default 1 (polynomial)
+//! knots_u = [0, 0, 0, 1, 1, 1]    # optional, size_u + degree_u + 1 non-decreasing values,
+//! knots_v = [0, 0, 1, 1]          # default clamped uniform on [0, 1]
+//! material = "concrete"           # a material of the geometry, by name
+//! level = 24                      # optional tessellation level, 1 to 256 (quads per side;
+//!                                 # `render --tess-level` overrides it, default 16)
 //! ```
 //! Unknown keys are errors (`deny_unknown_fields`); so are values out of range (negative
 //! counts, fov outside (0, 180), NaN or infinite numbers, more than `lights::MAX_LIGHTS` lights
 //! or `lights::MAX_HOTSPOT_CLUSTERS` clusters, opacity or albedo outside [0, 1]) and a
 //! `[[material]]` name the geometry does not have (the error lists some it has). Material
-//! overrides apply in file order once the geometry is loaded. Every error is one line naming
-//! the file and the key (`light[2].radius` for the third `[[light]]`, `material[1].name`), or
-//! the line and column of a syntax error.
+//! overrides apply in file order once the geometry is loaded, then the `[[nurbs]]` patches are
+//! added (named `nurbs[0]`, `nurbs[1]`, … in messages; a patch the kernels cannot evaluate —
+//! a degree outside 1..=5, wrong lengths, decreasing or non-finite knots, a domain of zero
+//! length, non-finite control points, weights not positive and finite, a level outside
+//! 1..=256 — is refused naming the patch and the field: `NurbsPatch::validate`). Every error is
+//! one line naming the file and the key (`light[2].radius` for the third `[[light]]`,
+//! `material[1].name`), or the line and column of a syntax error.
+use super::nurbs::{clamped_uniform, NurbsPatch, ScenePatch};
 use super::wavefront::MtlOptions;
 use super::{lights, Camera, Scene, BUILT_INS};
 use anyhow::{anyhow, bail, Result};
@@ -69,6 +86,59 @@ pub struct Description {
     #[serde(default)]
     pub material: Vec<MaterialDesc>,
     pub effects: Option<EffectsDesc>,
+    /// NURBS patches (`[[nurbs]]` tables), added after the material overrides.
+    #[serde(default)]
+    pub nurbs: Vec<NurbsDesc>,
+}
+
+/// One rational B-spline patch (world space); checked by `NurbsPatch::validate` once its
+/// material is found.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NurbsDesc {
+    pub degree_u: u32,
+    pub degree_v: u32,
+    pub size_u: u32,
+    pub size_v: u32,
+    /// `size_u · size_v` Cartesian points, u fastest.
+    pub control_points: Vec<[f32; 3]>,
+    /// Default: every weight 1.
+    pub weights: Option<Vec<f32>>,
+    /// Default: clamped uniform on [0, 1] (`nurbs::clamped_uniform`).
+    pub knots_u: Option<Vec<f32>>,
+    pub knots_v: Option<Vec<f32>>,
+    /// The name of a material of the geometry.
+    pub material: String,
+    pub level: Option<u32>,
+}
+
+impl NurbsDesc {
+    /// The patch named `name`, of material index `material`, validated.
+    fn patch(&self, name: String, material: u32, materials: usize) -> Result<ScenePatch> {
+        // Default knots only where the degree and size allow them and the sizes match the control
+        // points given (so a size is bounded by the file); otherwise validation names the field
+        // at fault, which it checks before the knots.
+        let consistent = self.size_u as u64 * self.size_v as u64 == self.control_points.len() as u64;
+        let knots = |degree: u32, size: u32, given: &Option<Vec<f32>>| match given {
+            Some(k) => k.clone(),
+            None if consistent && (1..=shaders::nurbs::MAX_DEGREE).contains(&degree) && size > degree => clamped_uniform(degree, size),
+            None => vec![],
+        };
+        let patch = NurbsPatch {
+            degree_u: self.degree_u,
+            degree_v: self.degree_v,
+            knots_u: knots(self.degree_u, self.size_u, &self.knots_u),
+            knots_v: knots(self.degree_v, self.size_v, &self.knots_v),
+            control_points: self.control_points.clone(),
+            weights: self.weights.clone().unwrap_or_else(|| vec![1.0; self.control_points.len()]),
+            size_u: self.size_u,
+            size_v: self.size_v,
+            material,
+        };
+        let p = ScenePatch { name, patch, level: self.level };
+        p.validate(materials)?;
+        Ok(p)
+    }
 }
 
 /// Overrides of the geometry's materials named `name`.
@@ -298,16 +368,36 @@ fn apply_material_overrides(scene: &mut Scene, overrides: &[MaterialDesc]) -> Re
             m.albedo = o.albedo.unwrap_or(m.albedo);
         }
         if !found {
-            let mut known: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
-            known.dedup();
-            let mut list = known.iter().take(LISTED_NAMES).map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
-            if known.len() > LISTED_NAMES {
-                list.push_str(&format!(", … ({} in all)", known.len()));
-            }
-            bail!("material[{i}].name = {:?} names no material of geometry {:?}; it has {list}", o.name, scene.name);
+            bail!("material[{i}].name = {:?} names no material of geometry {:?}; it has {}", o.name, scene.name, material_list(scene));
         }
     }
     Ok(())
+}
+
+/// Some of the scene's material names, quoted, for an error about a name it lacks.
+fn material_list(scene: &Scene) -> String {
+    let mut known: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+    known.dedup();
+    let mut list = known.iter().take(LISTED_NAMES).map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+    if known.len() > LISTED_NAMES {
+        list.push_str(&format!(", … ({} in all)", known.len()));
+    }
+    list
+}
+
+/// The `[[nurbs]]` tables as patches named `nurbs[i]`, each checked; a material name the scene
+/// lacks is an error naming the key.
+fn nurbs_patches(scene: &Scene, tables: &[NurbsDesc]) -> Result<Vec<ScenePatch>> {
+    tables
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let Some(material) = scene.materials.iter().position(|m| m.name == t.material) else {
+                bail!("nurbs[{i}].material = {:?} names no material of geometry {:?}; it has {}", t.material, scene.name, material_list(scene));
+            };
+            t.patch(format!("nurbs[{i}]"), material as u32, scene.materials.len())
+        })
+        .collect()
 }
 
 /// Loads a description file and builds its scene (geometry, camera, lights, effects).
@@ -335,6 +425,8 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
         _ => return Err(at(anyhow!("geometry = {geometry:?} is neither a built-in scene ({}) nor an .obj, .gltf or .glb file", BUILT_INS.join(", ")))),
     };
     apply_material_overrides(&mut scene, &d.material).map_err(at)?;
+    let patches = nurbs_patches(&scene, &d.nurbs).map_err(at)?;
+    scene.add_nurbs(patches);
     scene.name = d.name.clone().unwrap_or_else(|| path.file_stem().map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()));
     if let Some(c) = &d.camera {
         let default = scene.camera;

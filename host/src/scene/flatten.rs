@@ -4,12 +4,14 @@
 //! 1. [`flatten`] merges the meshes into one vertex/index set with one draw per mesh, the
 //!    materials into the G-buffer's material table (at most [`MAX_MATERIALS`]; each entry carries
 //!    the material's opacity: draws below 1 go to the transparent pass), and marks the textures a draw samples —
-//!    only where the scene's effects ask for them.
-//! 2. [`scene_input`] borrows the flattened arrays, the lights and the textures into a
-//!    [`SceneInput`] with the camera.
+//!    only where the scene's effects ask for them. Each NURBS patch gets a draw of its material
+//!    too, whose index range the tessellation pass assigns (`render::nurbs`).
+//! 2. [`scene_input`] borrows the flattened arrays, the lights, the textures and the NURBS
+//!    patches (with their levels and draws) into a [`SceneInput`] with the camera.
 //!
 //! Memory: one copy of the scene's vertices and indices (the renderer uploads from it).
 use super::{Scene, TextureKind};
+use crate::render::nurbs::NurbsDraw;
 use crate::render::{Draw, SceneInput, TextureData, ViewTransform};
 use anyhow::{bail, Result};
 use shaders::layout::{DrawParams, MaterialGpu, PointLight, MAX_MATERIALS};
@@ -23,12 +25,14 @@ pub struct Flattened {
     pub indices: Vec<u32>,
     pub draws: Vec<Draw>,
     pub materials: Vec<MaterialGpu>,
+    /// One draw per NURBS patch of the scene (in its order), its index range not yet assigned.
+    pub nurbs_draws: Vec<Draw>,
 }
 
 /// Merges a scene's meshes into one vertex/index set with one draw per mesh; every draw encodes
 /// its normals at `normal_precision` (the frame must read them at the same one).
 pub fn flatten(scene: &Scene, normal_precision: Precision) -> Result<Flattened> {
-    let mut f = Flattened { positions: vec![], normals: vec![], uvs: vec![], indices: vec![], draws: vec![], materials: vec![] };
+    let mut f = Flattened { positions: vec![], normals: vec![], uvs: vec![], indices: vec![], draws: vec![], materials: vec![], nurbs_draws: vec![] };
     for m in &scene.materials {
         f.materials.push(MaterialGpu { specular: m.specular, roughness: m.roughness, opacity: m.opacity, _pad: 0.0 });
     }
@@ -50,24 +54,30 @@ pub fn flatten(scene: &Scene, normal_precision: Precision) -> Result<Flattened> 
         f.normals.extend_from_slice(&mesh.normals);
         f.uvs.extend_from_slice(&mesh.uvs);
         f.indices.extend(mesh.indices.iter().map(|i| i + base));
-        let material = (mesh.material as usize).min(f.materials.len() - 1);
-        let m = scene.materials.get(material);
-        let albedo = m.map(|m| m.albedo).unwrap_or([0.8; 3]);
-        // Textures only where the scene's effects call for them (no sampling otherwise).
-        let texture = |path: Option<&std::path::PathBuf>| {
-            path.and_then(|p| scene.textures.iter().position(|t| &t.path == p)).map(|i| i as u32)
-        };
-        let albedo_texture = if scene.effects.textures { texture(m.and_then(|m| m.albedo_texture.as_ref())) } else { None };
-        let mask_texture = if scene.effects.alpha_test { texture(m.and_then(|m| m.alpha_mask_texture.as_ref())) } else { None };
-        f.draws.push(Draw {
-            first_index,
-            index_count: mesh.indices.len() as u32,
-            params: DrawParams { albedo, material: material as u32, normal_precision: normal_precision.code(), _pad: [0; 3] },
-            albedo_texture,
-            mask_texture,
-        });
+        f.draws.push(Draw { first_index, index_count: mesh.indices.len() as u32, ..draw_of(scene, mesh.material, f.materials.len(), normal_precision) });
     }
+    f.nurbs_draws = scene.nurbs.iter().map(|p| draw_of(scene, p.patch.material, f.materials.len(), normal_precision)).collect();
     Ok(f)
+}
+
+/// A draw of material `material` (clamped to the `materials` of the table) with no index range
+/// yet: its albedo, and its textures where the scene's effects call for them (no sampling
+/// otherwise).
+fn draw_of(scene: &Scene, material: u32, materials: usize, normal_precision: Precision) -> Draw {
+    let material = (material as usize).min(materials - 1);
+    let m = scene.materials.get(material);
+    let albedo = m.map(|m| m.albedo).unwrap_or([0.8; 3]);
+    let texture = |path: Option<&std::path::PathBuf>| path.and_then(|p| scene.textures.iter().position(|t| &t.path == p)).map(|i| i as u32);
+    let albedo_texture = if scene.effects.textures { texture(m.and_then(|m| m.albedo_texture.as_ref())) } else { None };
+    let mask_texture = if scene.effects.alpha_test { texture(m.and_then(|m| m.alpha_mask_texture.as_ref())) } else { None };
+    Draw {
+        first_index: 0,
+        index_count: 0,
+        params: DrawParams { albedo, material: material as u32, normal_precision: normal_precision.code(), _pad: [0; 3] },
+        albedo_texture,
+        mask_texture,
+        indirect: None,
+    }
 }
 
 /// The renderer's view of a scene and its lights.
@@ -92,5 +102,7 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
         far: c.far,
         effects: scene.effects.flags(),
         material_names: scene.materials.iter().map(|m| m.name.clone()).collect(),
+        nurbs: scene.nurbs.iter().zip(&flat.nurbs_draws).map(|(p, &draw)| NurbsDraw { patch: &p.patch, level: p.level(), draw }).collect(),
+        nurbs_tolerance: None,
     }
 }

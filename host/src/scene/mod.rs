@@ -12,7 +12,9 @@
 //! the techniques without one refuse such scenes).
 //!
 //! Curved surfaces: [`nurbs`] models rational B-spline patches (validation, GPU packing, an exact
-//! sphere and torus, a bicubic teapot); no scene holds them yet.
+//! sphere and torus, a bicubic teapot). A scene's [`Scene::nurbs`] come from the procedural
+//! `nurbs` scene or a description's `[[nurbs]]` tables; the renderer tessellates them on the GPU
+//! (`render::nurbs`). Bounds include their control points (a patch lies in their convex hull).
 //!
 //! Conventions: right-handed, y up, counter-clockwise front faces seen from outside; units are
 //! whatever the geometry uses (the procedural scenes use metres, Sponza its original Crytek
@@ -45,7 +47,7 @@ mod encoding_tests;
 mod gltf_tests;
 
 /// Built-in scene names accepted by [`Scene::load`].
-pub const BUILT_INS: [&str; 5] = ["city", "corridor", "glass", "sponza", "bunny"];
+pub const BUILT_INS: [&str; 6] = ["city", "corridor", "glass", "nurbs", "sponza", "bunny"];
 
 /// One draw's worth of triangles with a single material.
 ///
@@ -228,6 +230,8 @@ impl Effects {
 pub struct Scene {
     pub name: String,
     pub meshes: Vec<Mesh>,
+    /// Rational B-spline patches, tessellated by the renderer ([`Scene::add_nurbs`]).
+    pub nurbs: Vec<nurbs::ScenePatch>,
     /// Never empty in a loaded scene (geometry without materials gets one diffuse default).
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
@@ -235,7 +239,7 @@ pub struct Scene {
     /// World-space point lights; empty unless a description asked for some.
     pub lights: Vec<PointLight>,
     pub effects: Effects,
-    /// Axis-aligned bounds of all vertex positions, (min, max).
+    /// Axis-aligned bounds of all vertex positions and NURBS control points, (min, max).
     pub bounds: (Vec3, Vec3),
     /// Problems that did not stop loading (missing textures, missing MTL files, …).
     pub warnings: Vec<String>,
@@ -304,16 +308,32 @@ impl Scene {
     pub fn new(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, textures: Vec<Texture>, camera: Camera) -> Self {
         let bounds = bounds_of(&meshes);
         let effects = Effects::from_materials(&materials);
-        Self { name: name.to_owned(), meshes, materials, textures, camera, lights: vec![], effects, bounds, warnings: vec![] }
+        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], effects, bounds, warnings: vec![] }
+    }
+
+    /// Adds NURBS patches and grows the bounds by their control points.
+    pub fn add_nurbs(&mut self, patches: impl IntoIterator<Item = nurbs::ScenePatch>) {
+        self.nurbs.extend(patches);
+        let points = self.nurbs.iter().flat_map(|p| &p.patch.control_points);
+        self.bounds = bounds_of_points(self.meshes.iter().flat_map(|m| &m.positions).chain(points));
+    }
+
+    /// Tessellates every NURBS patch at `level` (`render --tess-level`).
+    pub fn set_tess_level(&mut self, level: u32) {
+        for p in &mut self.nurbs {
+            p.level = Some(level);
+        }
     }
 
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(Mesh::triangle_count).sum()
     }
 
-    /// Whether a mesh with triangles uses a transparent material ([`Material::is_transparent`]).
+    /// Whether a mesh with triangles or a NURBS patch uses a transparent material
+    /// ([`Material::is_transparent`]).
     pub fn has_transparency(&self) -> bool {
-        self.meshes.iter().any(|m| m.triangle_count() > 0 && self.materials.get(m.material as usize).is_some_and(Material::is_transparent))
+        let transparent = |m: u32| self.materials.get(m as usize).is_some_and(Material::is_transparent);
+        self.meshes.iter().any(|m| m.triangle_count() > 0 && transparent(m.material)) || self.nurbs.iter().any(|p| transparent(p.patch.material))
     }
 
     /// The loaded texture a material path names.
@@ -367,6 +387,9 @@ impl Scene {
                 bail!("mesh {m} vertex {v} has a non-finite uv {:?}", mesh.uvs[v]);
             }
         }
+        for p in &self.nurbs {
+            p.validate(self.materials.len())?;
+        }
         for (i, l) in self.lights.iter().enumerate() {
             crate::render::light_contract::check(i, l)?;
         }
@@ -384,15 +407,21 @@ pub fn built_in(name: &str, assets_dir: &Path, mtl: Option<wavefront::MtlOptions
         "city" => procedural::city(),
         "corridor" => procedural::corridor(),
         "glass" => procedural::glass(),
+        "nurbs" => procedural::nurbs(),
         _ => obj::load_builtin(name, assets_dir, mtl.unwrap_or_else(|| obj::builtin_mtl_options(name)))?,
     })
 }
 
 /// Axis-aligned bounds of every vertex; `(0, 0)` for a scene without vertices.
 pub fn bounds_of(meshes: &[Mesh]) -> (Vec3, Vec3) {
+    bounds_of_points(meshes.iter().flat_map(|m| &m.positions))
+}
+
+/// Axis-aligned bounds of points; `(0, 0)` for none.
+fn bounds_of_points<'a>(points: impl Iterator<Item = &'a [f32; 3]>) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for p in meshes.iter().flat_map(|m| &m.positions) {
+    for p in points {
         let p = Vec3::from_array(*p);
         lo = lo.min(p);
         hi = hi.max(p);

@@ -7,18 +7,17 @@
 //! points with premultiplied weights, `(w·x, w·y, w·z, w)`, and one shared knot buffer:
 //! `shaders::nurbs` module docs) and assigns each patch its vertex and index ranges.
 //!
-//! Not wired into scenes, descriptions or the renderer yet. The planned tessellation pass: the
-//! host uploads [`NurbsBuffers`] (the headers, the knots, the control points); one compute
-//! dispatch evaluates every patch's `(level + 1)²` grid vertices with
-//! `shaders::nurbs::tessellate_vertex` into the flat position/normal/uv streams the G-buffer pass
-//! pulls from, one more writes every quad's two triangles (`tessellate_indices`, offset by the
-//! patch's first vertex) into the index buffer, and the G-buffer pass draws them like any mesh,
-//! with the patch's material.
+//! A scene holds its patches as [`ScenePatch`]es (a name for messages, the patch, an optional
+//! tessellation level): the procedural `nurbs` scene, and `[[nurbs]]` tables of a TOML
+//! description. The renderer's tessellation pass (`render::nurbs`) packs them with
+//! [`NurbsBuffers::push_relative`] (control points relative to the camera) and writes their grids
+//! into the vertex streams and the index buffer on the GPU every frame; the raster passes then
+//! draw them like any mesh, with the patch's material.
 //!
 //! Conventions as [`Mesh`](super::Mesh): right-handed, y up; a patch's front side is where
 //! `S_u × S_v` points (counter-clockwise with u to the right and v up), outward for the built-ins.
 use anyhow::{bail, Result};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use shaders::layout::NurbsPatchGpu;
 use shaders::nurbs::{index_count, vertex_count, MAX_DEGREE};
 use std::f32::consts::FRAC_1_SQRT_2;
@@ -47,15 +46,26 @@ pub struct NurbsPatch {
 
 impl NurbsPatch {
     /// Checks everything the kernels rely on; the error is one line naming the patch and the field.
+    /// Degrees and sizes first, then the lengths they imply (control points, weights, knots),
+    /// then the values.
     pub fn validate(&self, name: &str) -> Result<()> {
         let dirs = [("u", self.degree_u, self.size_u, &self.knots_u), ("v", self.degree_v, self.size_v, &self.knots_v)];
-        for (d, degree, size, knots) in dirs {
+        for (d, degree, size, _) in dirs {
             if degree == 0 || degree > MAX_DEGREE {
                 bail!("NURBS patch {name:?}: degree_{d} is {degree}; it must be 1 to {MAX_DEGREE}");
             }
             if size <= degree {
                 bail!("NURBS patch {name:?}: size_{d} is {size}; degree {degree} needs at least {} control points", degree + 1);
             }
+        }
+        let n = self.size_u as u64 * self.size_v as u64;
+        if self.control_points.len() as u64 != n {
+            bail!("NURBS patch {name:?}: control_points has {} points; size_u · size_v = {n} needed", self.control_points.len());
+        }
+        if self.weights.len() as u64 != n {
+            bail!("NURBS patch {name:?}: weights has {} values; size_u · size_v = {n} needed", self.weights.len());
+        }
+        for (d, degree, size, knots) in dirs {
             let want = size as u64 + degree as u64 + 1;
             if knots.len() as u64 != want {
                 bail!("NURBS patch {name:?}: knots_{d} has {} values; size_{d} + degree_{d} + 1 = {want} needed", knots.len());
@@ -70,13 +80,6 @@ impl NurbsPatch {
             if hi <= lo {
                 bail!("NURBS patch {name:?}: the {d} domain knots_{d}[{degree}..={size}] = [{lo}, {hi}] has zero length");
             }
-        }
-        let n = self.size_u as u64 * self.size_v as u64;
-        if self.control_points.len() as u64 != n {
-            bail!("NURBS patch {name:?}: control_points has {} points; size_u · size_v = {n} needed", self.control_points.len());
-        }
-        if self.weights.len() as u64 != n {
-            bail!("NURBS patch {name:?}: weights has {} values; size_u · size_v = {n} needed", self.weights.len());
         }
         if let Some(i) = self.control_points.iter().position(|p| !Vec3::from_array(*p).is_finite()) {
             bail!("NURBS patch {name:?}: control_points[{i}] = {:?} is not finite", self.control_points[i]);
@@ -94,6 +97,41 @@ impl NurbsPatch {
     }
 }
 
+/// Tessellation level of a patch that sets none (`render --tess-level` sets every patch's).
+pub const DEFAULT_TESS_LEVEL: u32 = 16;
+/// Largest tessellation level: `(256 + 1)²` = 66 049 vertices and 393 216 indices per patch.
+pub const MAX_TESS_LEVEL: u32 = 256;
+
+/// A patch of a scene: its name (for messages), the surface, and its tessellation level.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScenePatch {
+    pub name: String,
+    pub patch: NurbsPatch,
+    /// Quads along each parameter direction, 1..=[`MAX_TESS_LEVEL`]; `None`: [`DEFAULT_TESS_LEVEL`].
+    pub level: Option<u32>,
+}
+
+impl ScenePatch {
+    /// The patch's checks ([`NurbsPatch::validate`]), its level, and its material against the
+    /// scene's `materials` materials; one line naming the patch and the field.
+    pub fn validate(&self, materials: usize) -> Result<()> {
+        let name = &self.name;
+        self.patch.validate(name)?;
+        if let Some(level) = self.level.filter(|l| !(1..=MAX_TESS_LEVEL).contains(l)) {
+            bail!("NURBS patch {name:?}: level is {level}; it must be 1 to {MAX_TESS_LEVEL}");
+        }
+        if self.patch.material as usize >= materials {
+            bail!("NURBS patch {name:?}: material is {}; the scene has {materials} materials", self.patch.material);
+        }
+        Ok(())
+    }
+
+    /// The level the patch is tessellated at.
+    pub fn level(&self) -> u32 {
+        self.level.unwrap_or(DEFAULT_TESS_LEVEL)
+    }
+}
+
 /// A clamped knot vector with uniform interior knots on [0, 1] (`size + degree + 1` values).
 pub fn clamped_uniform(degree: u32, size: u32) -> Vec<f32> {
     let spans = size - degree;
@@ -103,6 +141,13 @@ pub fn clamped_uniform(degree: u32, size: u32) -> Vec<f32> {
     k
 }
 
+/// Control point `p` of weight `w` made relative to `origin` and homogeneous:
+/// `(w·(p − origin), w)`, computed in f64 and rounded to f32 ([`NurbsBuffers::push_relative`]).
+pub fn relative_point(p: [f32; 3], w: f32, origin: DVec3) -> [f32; 4] {
+    let q = (Vec3::from_array(p).as_dvec3() - origin) * w as f64;
+    [q.x as f32, q.y as f32, q.z as f32, w]
+}
+
 /// Patches packed for the tessellation pass: headers, one knot buffer, one control-point buffer
 /// (homogeneous, premultiplied weights), and the vertices and indices the grids will need.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -110,22 +155,36 @@ pub struct NurbsBuffers {
     pub patches: Vec<NurbsPatchGpu>,
     pub knots: Vec<f32>,
     pub control_points: Vec<[f32; 4]>,
-    /// Vertices of every patch's grid: the vertex streams' length.
+    /// The control points as the patches give them, `(Cartesian point, weight)` (world space):
+    /// what [`relative_point`] makes `control_points` of, for any origin.
+    pub world: Vec<([f32; 3], f32)>,
+    /// The vertex streams' length: where the next patch's grid starts. Starts at 0, or where
+    /// the grids follow other geometry (the renderer: after the meshes' vertices).
     pub vertices: u32,
-    /// Indices of every patch's quads.
+    /// The index buffer's length, likewise.
     pub indices: u32,
 }
 
 impl NurbsBuffers {
     /// Appends a validated patch, tessellated at `level` (≥ 1) quads per side; returns its header.
     pub fn push(&mut self, patch: &NurbsPatch, level: u32) -> NurbsPatchGpu {
+        self.push_relative(patch, level, DVec3::ZERO)
+    }
+
+    /// [`NurbsBuffers::push`] with the control points relative to `origin` (the camera: the
+    /// renderer draws camera-relative, `render::camera_relative`): `(w·(x − c), w)` computed in
+    /// f64 and rounded to f32. Exact for the homogeneous points: a rational surface is
+    /// translated by translating its Cartesian control points. At `origin = 0` this is the f32
+    /// product `w·x` itself (the product of two f32 is exact in f64).
+    pub fn push_relative(&mut self, patch: &NurbsPatch, level: u32, origin: DVec3) -> NurbsPatchGpu {
         let level = level.max(1);
         let knot_offset_u = self.knots.len() as u32;
         self.knots.extend(&patch.knots_u);
         let knot_offset_v = self.knots.len() as u32;
         self.knots.extend(&patch.knots_v);
         let cp_offset = self.control_points.len() as u32;
-        self.control_points.extend(patch.control_points.iter().zip(&patch.weights).map(|(p, &w)| [p[0] * w, p[1] * w, p[2] * w, w]));
+        self.control_points.extend(patch.control_points.iter().zip(&patch.weights).map(|(p, &w)| relative_point(*p, w, origin)));
+        self.world.extend(patch.control_points.iter().copied().zip(patch.weights.iter().copied()));
         let header = NurbsPatchGpu {
             degree_u: patch.degree_u,
             degree_v: patch.degree_v,

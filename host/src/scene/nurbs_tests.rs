@@ -156,3 +156,73 @@ fn buffers_pack_patches_with_premultiplied_weights() {
     assert_eq!(b.control_points[4 + 1], [p[0] * w, p[1] * w, p[2] * w, w]);
     assert_eq!(b.patches, vec![h0, h1]);
 }
+
+/// Packed relative to a camera far from the origin, a patch evaluates to its world-space points
+/// minus the camera, as the renderer draws (camera-relative).
+#[test]
+fn relative_packing_translates_the_surface() {
+    let (c, r) = (Vec3::new(1.0e5 + 3.0, 20.0, -1.0e5), 2.0);
+    let eye = glam::DVec3::new(1.0e5, 18.5, -1.0e5 + 9.0);
+    let mut b = NurbsBuffers::default();
+    let h = b.push_relative(&sphere(c, r), 8, eye);
+    let centre = (c.as_dvec3() - eye).as_vec3();
+    let knot = |i: u32| b.knots[i as usize];
+    let cp = |i: u32| vec4(b.control_points[i as usize]);
+    for k in 0..vertex_count(8) {
+        let (i, j) = vertex_grid(8, k);
+        let v = tessellate_vertex(&h, i, j, 8, knot, cp);
+        let d = v.position - centre;
+        // Near the camera f32 keeps the radius to 1e-6 (world-space f32 at 1e5 m would not).
+        assert!((d.length() / r - 1.0).abs() < 1e-6, "{v:?}: radius {}", d.length());
+    }
+    // At the origin it is the plain packing, bit for bit.
+    let (mut a, mut z) = (NurbsBuffers::default(), NurbsBuffers::default());
+    a.push(&sphere(c, r), 3);
+    z.push_relative(&sphere(c, r), 3, glam::DVec3::ZERO);
+    assert_eq!(a, z);
+}
+
+/// `[[nurbs]]` tables of a description: a patch loads with its defaults (clamped uniform knots,
+/// weights 1, the default level), grows the bounds and takes its material by name; bad input is
+/// one line naming the file, the patch and the field.
+#[test]
+fn description_patches_load_and_bad_ones_are_named() {
+    use super::super::tests::{assets, description_err, temp::TempDir};
+    use super::super::Scene;
+    let table = |body: &str| format!("geometry = \"nurbs\"\n[[nurbs]]\ndegree_u = 1\ndegree_v = 1\nsize_u = 2\nsize_v = 2\ncontrol_points = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\nmaterial = \"gold\"\n[[nurbs]]\n{body}\n");
+    let good = "degree_u = 2\ndegree_v = 1\nsize_u = 3\nsize_v = 2\ncontrol_points = [[0, 0, 0], [1, 0, 1], [2, 0, 0], [0, 30, 0], [1, 30, 1], [2, 30, 0]]\nweights = [1, 0.5, 1, 1, 0.5, 1]\nmaterial = \"floor\"\nlevel = 3";
+    let dir = TempDir::new("nurbs-desc");
+    let p = dir.write("n.toml", &table(good));
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(s.nurbs.len(), 34 + 2, "the scene's patches, then the tables'");
+    let (a, b) = (&s.nurbs[34], &s.nurbs[35]);
+    assert_eq!((a.name.as_str(), a.level, a.level(), a.patch.material), ("nurbs[0]", None, DEFAULT_TESS_LEVEL, 3));
+    assert_eq!((a.patch.knots_u.as_slice(), a.patch.weights.as_slice()), (&[0.0, 0.0, 1.0, 1.0][..], &[1.0; 4][..]));
+    assert_eq!((b.name.as_str(), b.level, b.patch.material, b.patch.knots_u.len()), ("nurbs[1]", Some(3), 0, 6));
+    assert_eq!(s.bounds.1.y, 30.0, "the bounds hold the control points");
+    let cases = [
+        (good.replace("degree_u = 2", "degree_u = 0"), "degree_u is 0"),
+        (good.replace("degree_v = 1", "degree_v = 6"), "degree_v is 6"),
+        (good.replace("weights = [1, 0.5, 1, 1, 0.5, 1]", "weights = [1, 0.5, 1, 1, 0, 1]"), "weights[4] = 0; weights must be positive"),
+        (good.replace("weights = [1, 0.5, 1, 1, 0.5, 1]", "weights = [1, 0.5, 1, 1, -0.5, 1]"), "weights[4] = -0.5"),
+        (good.replace("weights = [1, 0.5, 1, 1, 0.5, 1]", "weights = [1, 0.5, 1]"), "weights has 3 values; size_u · size_v = 6 needed"),
+        (good.replace("[1, 30, 1]", "[1, nan, 1]"), "control_points[4] = [1.0, NaN, 1.0] is not finite"),
+        (good.replace("[2, 30, 0]]", "[2, 30, 0], [3, 30, 0]]"), "control_points has 7 points; size_u · size_v = 6 needed"),
+        (format!("{good}\nknots_u = [0, 0, 0, 1, 0.5, 1]"), "knots_u[4] = 0.5 is less than knots_u[3] = 1: knot vectors must be non-decreasing"),
+        (format!("{good}\nknots_v = [0, 0, 1]"), "knots_v has 3 values; size_v + degree_v + 1 = 4 needed"),
+        (format!("{good}\nknots_v = [0, 0, 0, 0]"), "v domain knots_v[1..=2] = [0, 0] has zero length"),
+        (good.replace("size_u = 3", "size_u = 2"), "size_u is 2; degree 2 needs at least 3"),
+        (good.replace("level = 3", "level = 0"), "level is 0; it must be 1 to 256"),
+        (good.replace("level = 3", "level = 257"), "level is 257"),
+        // Sizes that do not match the points: no default knots are built for them.
+        (good.replace("size_u = 3", "size_u = 4000000000"), "control_points has 6 points; size_u · size_v = 8000000000 needed"),
+    ];
+    for (body, want) in cases {
+        let e = description_err(&table(&body));
+        assert!(e.contains("NURBS patch \"nurbs[1]\": ") && e.contains(want) && !e.contains('\n'), "{want:?}: {e}");
+    }
+    let e = description_err(&table(&good.replace("\"floor\"", "\"chrome\"")));
+    assert!(e.contains("nurbs[1].material = \"chrome\" names no material of geometry") && e.contains("\"gold\""), "{e}");
+    let e = description_err(&table(&format!("{good}\nknot_u = [0, 1]")));
+    assert!(e.contains("unknown field `knot_u`") && !e.contains('\n'), "{e}");
+}

@@ -10,15 +10,18 @@
 //!   before the facades along the central avenue, panes across it over the crossings, and a
 //!   stack of [`GLASS_STACK_PANES`] parallel panes in it that puts that many transparent layers
 //!   (twice as many surfaces) on the pixels looking through it (view `glass@stack`).
+//! * [`nurbs`]: curved surfaces for the tessellation pass: the exact sphere, the exact torus and
+//!   the 32-patch bicubic teapot of [`super::nurbs`] on a floor, the camera in front of them.
 //!
 //! Boxes have 24 vertices (flat normals per face) and counter-clockwise front faces seen from
 //! outside (right-handed, y up); uvs are face-local metres.
 use super::lights::Pcg32;
+use super::nurbs::{self as patches, ScenePatch};
 use super::{Camera, Material, Mesh, Scene};
 use glam::Vec3;
 
 /// The built-in scenes this module makes.
-pub const NAMES: [&str; 3] = ["city", "corridor", "glass"];
+pub const NAMES: [&str; 4] = ["city", "corridor", "glass", "nurbs"];
 
 /// An axis-aligned box, (min, max).
 pub type BoxBounds = (Vec3, Vec3);
@@ -191,6 +194,31 @@ pub fn glass() -> Scene {
     Scene::new("glass", meshes, materials, vec![], camera)
 }
 
+/// The NURBS scene (see the module docs): a 24 × 18 m floor, the teapot (3.15 m tall) at the
+/// origin with its spout toward +x, the sphere (radius 1.3) to its left, the torus (radii 1.4 and
+/// 0.45) lying on the floor to its right; 4 materials (3 with specular). Camera: 10.5 m in front,
+/// 4.5 m up, looking at the teapot's middle (near 0.1, far 100).
+pub fn nurbs() -> Scene {
+    let materials = vec![
+        material("floor", [0.45, 0.45, 0.42], 0.0, 1.0),
+        material("porcelain", [0.85, 0.85, 0.80], 0.5, 0.3),
+        material("red lacquer", [0.80, 0.18, 0.12], 0.3, 0.4),
+        material("gold", [0.90, 0.65, 0.20], 0.8, 0.25),
+    ];
+    let mut floor = Mesh::default();
+    push_ground(&mut floor, [-12.0, -8.0], [12.0, 10.0], 0.0);
+    let camera = Camera { position: Vec3::new(0.0, 4.5, 11.0), target: Vec3::new(0.0, 1.2, 0.5), up: Vec3::Y, fov_y_degrees: 60.0, near: 0.1, far: 100.0 };
+    let mut scene = Scene::new("nurbs", vec![floor], materials, vec![], camera);
+    let patch = |name: String, patch: patches::NurbsPatch, material: u32| ScenePatch { name, patch: patches::NurbsPatch { material, ..patch }, level: None };
+    let mut all = vec![
+        patch("sphere".into(), patches::sphere(Vec3::new(-6.0, 1.3, 1.5), 1.3), 2),
+        patch("torus".into(), patches::torus(Vec3::new(6.0, 0.45, 1.5), 1.4, 0.45), 3),
+    ];
+    all.extend(patches::teapot().into_iter().enumerate().map(|(k, p)| patch(format!("teapot[{k}]"), p, 1)));
+    scene.add_nurbs(all);
+    scene
+}
+
 /// Corridor length, width and height (m); pillars every [`CORRIDOR_BAY`] m.
 pub const CORRIDOR_LENGTH: f32 = 120.0;
 pub const CORRIDOR_WIDTH: f32 = 6.0;
@@ -318,6 +346,27 @@ mod tests {
         assert!(city_buildings().iter().all(|(b, _)| b.0.x > 1.0 || b.1.x < -1.0));
         assert!(a.effects.specular && !a.effects.textures && !a.effects.alpha_test);
         assert_eq!(a.effects.flags(), shaders::layout::EFFECT_SPECULAR);
+    }
+
+    #[test]
+    fn nurbs_scene_holds_the_three_shapes_in_view() {
+        let a = nurbs();
+        assert_finite(&a);
+        assert_ccw(&a);
+        assert_eq!(a.nurbs.len(), 2 + 32, "sphere, torus and the teapot's 32 patches");
+        assert!(a.nurbs.iter().all(|p| p.level.is_none() && p.level() == patches::DEFAULT_TESS_LEVEL));
+        let (lo, hi) = a.bounds;
+        // The sphere's control points reach x = −7.3, the torus's x = 7.85; the floor is wider.
+        assert!(lo.x == -12.0 && hi.x == 12.0 && lo.y == 0.0 && hi.y >= 3.15, "{lo} {hi}");
+        // Every control point lies inside the camera's view at 16:9 (so every surface does).
+        let c = a.camera;
+        let view = crate::render::ViewTransform::look_at(c.position.as_dvec3(), c.target.as_dvec3(), c.up.as_dvec3());
+        let t = (0.5 * c.fov_y_degrees).to_radians().tan();
+        for p in a.nurbs.iter().flat_map(|p| &p.patch.control_points) {
+            let q = view.to_view(*p);
+            assert!(-q.z > c.near && q.y.abs() < -q.z * t && q.x.abs() < -q.z * t * 16.0 / 9.0, "{p:?} is outside the view");
+        }
+        assert!(a.effects.specular);
     }
 
     #[test]

@@ -27,7 +27,7 @@ fn built_ins_load_and_unknown_names_are_refused() {
         assert!(s.triangle_count() > 0 && s.lights.is_empty() && s.warnings.is_empty());
     }
     let e = format!("{:#}", Scene::load("cty", &assets()).unwrap_err());
-    assert!(e.contains("unknown scene \"cty\"") && e.contains("city, corridor, glass, sponza, bunny"), "{e}");
+    assert!(e.contains("unknown scene \"cty\"") && e.contains("city, corridor, glass, nurbs, sponza, bunny"), "{e}");
 }
 
 #[test]
@@ -232,7 +232,7 @@ fn shipped_example_descriptions_load() {
         }
     }
     found.sort();
-    assert_eq!(found, ["city-1k.toml", "corridor-hotspots.toml", "corridor-surfaces.toml", "sponza-curtains.toml"], "example descriptions in assets/");
+    assert_eq!(found, ["city-1k.toml", "corridor-hotspots.toml", "corridor-surfaces.toml", "nurbs-wave.toml", "sponza-curtains.toml"], "example descriptions in assets/");
     let h = Scene::load(dir.join("corridor-hotspots.toml").to_str().unwrap(), &assets()).unwrap();
     assert!(!h.effects.specular && h.camera.fov_y_degrees == 70.0 && h.lights.len() == 4000);
 }

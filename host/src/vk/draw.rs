@@ -115,6 +115,25 @@ impl Recorder<'_> {
     /// Draws `index_count` indices from `first_index` with `pipe`, `bindings` pushed at set 0 (in
     /// the handle's order and kinds) and `params` as the fragment stage's push constants.
     pub fn draw_indexed<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, first_index: u32, index_count: u32) -> VkResult<()> {
+        self.bind_draw(pipe, bindings, params)?;
+        unsafe { self.ctx.device.cmd_draw_indexed(self.cmd, index_count, 1, first_index, 0, 0) };
+        Ok(())
+    }
+
+    /// As [`Recorder::draw_indexed`], with the index count, first index and vertex offset a
+    /// kernel wrote: the `VkDrawIndexedIndirectCommand` number `draw` of `args` (5 words each).
+    pub fn draw_indexed_indirect<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, args: &Buffer, draw: u32) -> VkResult<()> {
+        const STRIDE: u64 = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
+        if STRIDE * (draw as u64 + 1) > args.size {
+            return Err(VkError::Kernel { entry: pipe.kernel.fragment, what: format!("indirect draw {draw} past the end of {}", args.name) });
+        }
+        self.bind_draw(pipe, bindings, params)?;
+        unsafe { self.ctx.device.cmd_draw_indexed_indirect(self.cmd, args.raw, STRIDE * draw as u64, 1, STRIDE as u32) };
+        Ok(())
+    }
+
+    /// Binds `pipe` (if not bound), pushes `bindings` at set 0 and `params` for a draw.
+    fn bind_draw<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P) -> VkResult<()> {
         let k = &pipe.kernel;
         let buffers = k.vertex_storage_buffers + k.fragment_storage_buffers;
         let kinds_match = bindings.len() == k.bindings() as usize
@@ -161,7 +180,6 @@ impl Recorder<'_> {
             }
             self.ctx.push_descriptor.cmd_push_descriptor_set(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipe.layout, 0, &writes);
             d.cmd_push_constants(self.cmd, pipe.layout, vk::ShaderStageFlags::FRAGMENT, 0, bytemuck::bytes_of(params));
-            d.cmd_draw_indexed(self.cmd, index_count, 1, first_index, 0, 0);
         }
         Ok(())
     }
@@ -170,6 +188,26 @@ impl Recorder<'_> {
     /// copies and host reads (the transparent pass's lists and counters).
     pub fn kernels_read_fragment_writes(&mut self) {
         barrier(self.ctx, self.cmd, vk::AccessFlags::SHADER_WRITE, vk::PipelineStageFlags::FRAGMENT_SHADER);
+    }
+
+    /// Makes earlier kernels' storage-buffer writes visible to the vertex stage of later raster
+    /// passes: as index-buffer reads and as storage-buffer reads of vertex shaders (geometry that
+    /// kernels wrote, e.g. tessellated NURBS grids).
+    pub fn draws_read_kernel_writes(&mut self) {
+        let b = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::INDEX_READ | vk::AccessFlags::SHADER_READ);
+        unsafe {
+            self.ctx.device.cmd_pipeline_barrier(
+                self.cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::VERTEX_INPUT | vk::PipelineStageFlags::VERTEX_SHADER,
+                vk::DependencyFlags::empty(),
+                &[b],
+                &[],
+                &[],
+            )
+        };
     }
 
     /// Ends the raster pass begun by [`Recorder::begin_rendering`].

@@ -98,15 +98,28 @@ impl Buffer {
 
     /// A device-local index (and storage) buffer holding `indices` (a word for none).
     pub fn indices(ctx: &Context, name: &str, indices: &[u32]) -> VkResult<Self> {
-        let mut b = Self::new(ctx, name, 4 * indices.len().max(1) as u64, STORAGE | vk::BufferUsageFlags::INDEX_BUFFER, MemoryLocation::GpuOnly)?;
+        Self::indices_reserving(ctx, name, indices, 0)
+    }
+
+    /// [`Buffer::indices`] with room for `extra` more indices after them (written by kernels;
+    /// undefined until then).
+    pub fn indices_reserving(ctx: &Context, name: &str, indices: &[u32], extra: u64) -> VkResult<Self> {
+        let bytes = 4 * (indices.len() as u64 + extra).max(1);
+        let mut b = Self::new(ctx, name, bytes, STORAGE | vk::BufferUsageFlags::INDEX_BUFFER, MemoryLocation::GpuOnly)?;
         b.write(indices)?;
         Ok(b)
     }
 
     /// A device-local storage buffer holding `data`.
     pub fn from_slice<T: Pod>(ctx: &Context, name: &str, data: &[T]) -> VkResult<Self> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let mut b = Self::storage(ctx, name, bytes.len() as u64)?;
+        Self::from_slice_reserving(ctx, name, data, 0)
+    }
+
+    /// [`Buffer::from_slice`] with room for `extra` more elements after `data` (written by
+    /// kernels; undefined until then).
+    pub fn from_slice_reserving<T: Pod>(ctx: &Context, name: &str, data: &[T], extra: u64) -> VkResult<Self> {
+        let bytes = std::mem::size_of::<T>() as u64 * (data.len() as u64 + extra);
+        let mut b = Self::storage(ctx, name, bytes)?;
         b.write(data)?;
         Ok(b)
     }
