@@ -193,3 +193,28 @@ fn bench_times_the_transparent_pass() {
         }
     }
 }
+
+/// The tessellation knob of the accuracy study on the NURBS scene: the finest level is the
+/// reference (error 0), the knob reaches the pass (level 4 gives another image), the geometric
+/// error falls with the level and with the adaptive tolerance, the tessellation pass + G-buffer
+/// is timed, and its Pareto plot is written.
+#[test]
+fn accuracy_study_tessellation_knob() {
+    let dir = TempDir::new("accuracy-tess");
+    let out = dir.path().to_str().unwrap();
+    let run = manylights([
+        "bench", "--study", "accuracy", "--knobs", "tessellation", "--lights", "300", "--scenes", "nurbs", "--width", "96", "--height", "54", "--frames", "1", "--out", out,
+    ]);
+    assert!(run.ok, "study failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("accuracy.csv"));
+    let rows: Vec<_> = csv.rows().filter(|r| r.get("knob") == "tessellation").collect();
+    let settings: Vec<&str> = rows.iter().map(|r| r.get("setting")).collect();
+    assert_eq!(settings, ["level 4", "level 8", "level 16", "level 32", "level 64", "adaptive, 2 px", "adaptive, 1 px", "adaptive, 0.5 px", "adaptive, 0.25 px"]);
+    let geo: Vec<f64> = rows.iter().map(|r| r.num("geometric_error")).collect();
+    assert!(geo[..5].windows(2).all(|w| w[1] < w[0]), "the geometric error falls with the level: {geo:?}");
+    assert!(geo[5..].windows(2).all(|w| w[1] <= w[0]), "and with the adaptive tolerance: {geo:?}");
+    assert_eq!(rows[4].num("max_abs_255"), 0.0, "the finest level is the reference");
+    assert!(rows[0].num("max_abs_255") > 1.0, "level 4 gives another image: the knob reaches the pass");
+    assert!(rows.iter().all(|r| r.num("tessellation_gbuffer_ms") > 0.0), "the tessellation pass and the G-buffer are timed");
+    assert!(std::fs::read_to_string(dir.join("pareto-tessellation-nurbs.svg")).expect("tessellation pareto plot").starts_with("<svg"));
+}

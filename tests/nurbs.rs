@@ -211,3 +211,26 @@ fn cli_adaptive_levels() {
     let r = manylights(["render", "--scene", "nurbs", "--technique", "forward-plus", "--tess-error", "1", "--out", o]);
     assert_one_line_error(&r, "forward-plus with --tess-error", "forward-plus");
 }
+
+/// A camera moved between frames (the viewer's `Renderer::set_view`): the patches' control
+/// points follow the new eye, so the frame equals a fresh render from there, pixel for pixel.
+#[test]
+fn a_moved_camera_tessellates_relative_to_the_new_eye() {
+    let gpu = common::gpu();
+    let scene = nurbs_scene();
+    let l = lights::uniform(&scene, 500, 4).unwrap();
+    let s = settings(96, 54, Technique::ClusteredBvh);
+    let flat = flatten(&scene, s.normal_precision).unwrap();
+    let mut moved = scene.clone();
+    moved.camera.position += glam::Vec3::new(1.5, 0.5, -2.0);
+    let fresh = frame(&gpu, &moved, &l, &s);
+    let mut r = render::renderer::Renderer::new(&gpu, &scene_input(&scene, &flat, &l), &s).unwrap();
+    r.frame(&gpu).unwrap();
+    let before = r.pixels().unwrap();
+    r.set_view(&gpu, scene_input(&moved, &flat, &l).view, &flat.positions, &l).unwrap();
+    r.frame(&gpu).unwrap();
+    let after = r.pixels().unwrap();
+    assert_ne!(before, fresh.pixels, "the move changes the frame");
+    assert_eq!(after, fresh.pixels, "the moved renderer draws what a fresh render from there draws");
+    common::assert_clean(&gpu);
+}

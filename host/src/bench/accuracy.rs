@@ -25,12 +25,19 @@
 //!    within 1/255 — brute force would shade every light for every transparent fragment (10k
 //!    lights × tens of layers per pixel at 1080p: minutes per frame). Its time is the
 //!    transparent pass (raster) plus the resolve, so its Pareto plot is a separate one.
+//! 6. **NURBS tessellation** (scenes with NURBS patches, e.g. `nurbs`) — fixed levels 4, 8, 16,
+//!    32, 64 and adaptive tolerances of 2, 1, ½ and ¼ pixel (`--tess-error`), with
+//!    `clustered-bvh`; reference: level 64. Besides the image error, the largest distance of the
+//!    triangles from the exact surface (`scene::nurbs::tessellation_error`, f64, at each patch's
+//!    level as the GPU chose it), timed by the tessellation pass plus the G-buffer (its own
+//!    Pareto plot).
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
 use crate::render::transparent::OitVariant;
 use crate::render::{self, Frame, Settings, Technique};
 use crate::scene::flatten::{flatten, scene_input};
 use crate::scene::lights;
+use crate::scene::nurbs::tessellation_error;
 use anyhow::{Context as _, Result};
 use plotters::prelude::*;
 use shaders::layout::*;
@@ -51,10 +58,12 @@ pub enum Knob {
     Culling,
     /// 5. order-independent transparency (scenes with transparent materials).
     Oit,
+    /// 6. NURBS tessellation (scenes with NURBS patches).
+    Tessellation,
 }
 
 impl Knob {
-    pub const ALL: [Knob; 5] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit];
+    pub const ALL: [Knob; 6] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation];
 }
 
 impl std::fmt::Display for Knob {
@@ -82,7 +91,15 @@ pub struct AccuracyRow {
     /// The transparent pass plus its resolve (0 in scenes without transparency).
     pub transparent_ms: f64,
     pub lights_per_cluster: f64,
+    /// Largest distance of the tessellated triangles from the exact surface (tessellation knob).
+    pub geometric_error: Option<f64>,
+    /// The tessellation pass plus the G-buffer (0 in scenes without NURBS patches).
+    pub tessellation_ms: f64,
 }
+
+/// The tessellation knob's settings: fixed levels, then adaptive tolerances in pixels.
+pub const TESS_LEVELS: [u32; 5] = [4, 8, 16, 32, 64];
+pub const TESS_TOLERANCES: [f32; 4] = [2.0, 1.0, 0.5, 0.25];
 
 /// The OIT knob's settings, most accurate first.
 pub const OIT_SETTINGS: [(OitVariant, &str); 6] = [
@@ -196,8 +213,11 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 shading_ms: pass(f, "shading"),
                 transparent_ms: pass(f, "transparent") + pass(f, "oit resolve"),
                 lights_per_cluster: lists.mean_per_cluster,
+                geometric_error: None,
+                tessellation_ms: pass(f, "tessellation") + pass(f, "gbuffer"),
             });
         };
+        let mut tess_errors = Vec::new();
         let wants = |k: Knob| a.knobs.contains(&k);
         // 1: reference = brute force, float32 normals, window falloff.
         if wants(Knob::Normals) {
@@ -242,8 +262,39 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
             let oit = |variant| Settings { oit: variant, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) };
             let frames: Vec<Frame> = OIT_SETTINGS.iter().map(|&(variant, _)| run(&base, 0, &oit(variant))).collect::<Result<_>>()?;
             for (f, (_, label)) in frames.iter().zip(OIT_SETTINGS) {
-                measure("transparency (OIT)", label.into(), &frames[0], f, None);
+                measure(OIT_KNOB, label.into(), &frames[0], f, None);
             }
+        }
+        // 6: reference = the finest fixed level.
+        if wants(Knob::Tessellation) && !scene.nurbs.is_empty() {
+            let s = settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16);
+            let tess = |level: Option<u32>, tolerance: Option<f32>| -> Result<Frame> {
+                let mut at = scene.clone();
+                if let Some(l) = level {
+                    at.set_tess_level(l);
+                }
+                let mut input = scene_input(&at, &flat, &base);
+                input.nurbs_tolerance = tolerance;
+                bar.inc(1);
+                render::render(gpu, &input, &s)
+            };
+            let finest = *TESS_LEVELS.last().unwrap_or(&64);
+            let reference = tess(Some(finest), None)?;
+            let error_at = |f: &Frame| scene.nurbs.iter().zip(&f.tess_levels).map(|(p, &l)| tessellation_error(&p.patch, l)).fold(0.0, f64::max);
+            for level in TESS_LEVELS {
+                let f = tess(Some(level), None)?;
+                tess_errors.push(error_at(&f));
+                measure(TESS_KNOB, format!("level {level}"), &reference, &f, None);
+            }
+            for tolerance in TESS_TOLERANCES {
+                let f = tess(None, Some(tolerance))?;
+                tess_errors.push(error_at(&f));
+                measure(TESS_KNOB, format!("adaptive, {tolerance} px"), &reference, &f, None);
+            }
+        }
+        let tess_rows = rows.iter_mut().filter(|r| r.scene == *name && r.knob == TESS_KNOB);
+        for (r, e) in tess_rows.zip(tess_errors) {
+            r.geometric_error = Some(e);
         }
     }
     bar.finish_and_clear();
@@ -252,13 +303,28 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
 
 /// `accuracy.csv`.
 pub fn write_csv(rows: &[AccuracyRow], w: &mut impl std::io::Write) -> std::io::Result<()> {
-    writeln!(w, "scene,knob,setting,psnr_db,max_abs_255,pixels_differing_pct,normal_max_deg,normal_mean_deg,frame_ms,compute_ms,assignment_ms,shading_ms,transparent_ms,lights_per_cluster")?;
+    writeln!(w, "scene,knob,setting,psnr_db,max_abs_255,pixels_differing_pct,normal_max_deg,normal_mean_deg,frame_ms,compute_ms,assignment_ms,shading_ms,transparent_ms,lights_per_cluster,geometric_error,tessellation_gbuffer_ms")?;
     for r in rows {
         let (nmax, nmean) = r.normal_error_deg.map(|(a, b)| (format!("{a:.6}"), format!("{b:.6}"))).unwrap_or_default();
         writeln!(
             w,
-            "{},{},\"{}\",{:.3},{},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.3}",
-            r.scene, r.knob, r.setting, r.psnr_db, r.max_abs_255, r.pixels_differing_pct, nmax, nmean, r.frame_ms, r.compute_ms, r.assignment_ms, r.shading_ms, r.transparent_ms, r.lights_per_cluster
+            "{},{},\"{}\",{:.3},{},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.3},{},{:.6}",
+            r.scene,
+            r.knob,
+            r.setting,
+            r.psnr_db,
+            r.max_abs_255,
+            r.pixels_differing_pct,
+            nmax,
+            nmean,
+            r.frame_ms,
+            r.compute_ms,
+            r.assignment_ms,
+            r.shading_ms,
+            r.transparent_ms,
+            r.lights_per_cluster,
+            r.geometric_error.map(|e| format!("{e:.6e}")).unwrap_or_default(),
+            r.tessellation_ms
         )?;
     }
     Ok(())
@@ -280,14 +346,31 @@ pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[Path
     scenes.dedup();
     for scene in scenes {
         let _ = writeln!(md, "## {scene}\n");
-        let _ = writeln!(md, "| knob | setting | PSNR dB | max Δ/255 | pixels differing | normal error max / mean ° | frame ms | compute ms | assignment ms | shading ms | transparent + resolve ms | lights/cluster |");
-        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(
+            md,
+            "| knob | setting | PSNR dB | max Δ/255 | pixels differing | normal error max / mean ° | geometric error | frame ms | compute ms | assignment ms | shading ms | transparent + resolve ms | tessellation + G-buffer ms | lights/cluster |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in rows.iter().filter(|r| r.scene == scene) {
             let ne = r.normal_error_deg.map(|(a, b)| format!("{a:.4} / {b:.4}")).unwrap_or_else(|| "–".into());
+            let ge = r.geometric_error.map(|e| format!("{e:.3e}")).unwrap_or_else(|| "–".into());
             let _ = writeln!(
                 md,
-                "| {} | {} | {:.2} | {} | {:.3} % | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} |",
-                r.knob, r.setting, r.psnr_db, r.max_abs_255, r.pixels_differing_pct, ne, r.frame_ms, r.compute_ms, r.assignment_ms, r.shading_ms, r.transparent_ms, r.lights_per_cluster
+                "| {} | {} | {:.2} | {} | {:.3} % | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} |",
+                r.knob,
+                r.setting,
+                r.psnr_db,
+                r.max_abs_255,
+                r.pixels_differing_pct,
+                ne,
+                ge,
+                r.frame_ms,
+                r.compute_ms,
+                r.assignment_ms,
+                r.shading_ms,
+                r.transparent_ms,
+                r.tessellation_ms,
+                r.lights_per_cluster
             );
         }
         let _ = writeln!(md);
@@ -301,6 +384,7 @@ pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[Path
 /// The knobs timed by compute ms (one plot per scene), and the OIT knob, timed by its passes.
 const COMPUTE_KNOBS: [&str; 4] = ["normal encoding", "culling test", "tile size", "falloff"];
 const OIT_KNOB: &str = "transparency (OIT)";
+const TESS_KNOB: &str = "tessellation";
 
 /// Error (RMSE in 8-bit units, from the PSNR) vs time, one point per setting, the Pareto front
 /// joined: per scene one plot of the compute-time knobs against compute ms and, where the scene
@@ -324,6 +408,13 @@ pub fn pareto_plots(rows: &[AccuracyRow], dir: &Path) -> Result<Vec<PathBuf>> {
             let name = PathBuf::from(format!("pareto-oit-{}.svg", slug(scene)));
             let title = format!("{scene}: OIT image error vs transparent pass + resolve time");
             plot(&oit, &[OIT_KNOB], |r| r.transparent_ms, "transparent pass + resolve ms (median)", &title, &dir.join(&name))?;
+            files.push(name);
+        }
+        let tess = of(&[TESS_KNOB]);
+        if !tess.is_empty() {
+            let name = PathBuf::from(format!("pareto-tessellation-{}.svg", slug(scene)));
+            let title = format!("{scene}: NURBS tessellation image error vs tessellation + G-buffer time");
+            plot(&tess, &[TESS_KNOB], |r| r.tessellation_ms, "tessellation pass + G-buffer ms (median)", &title, &dir.join(&name))?;
             files.push(name);
         }
     }

@@ -218,6 +218,9 @@ pub struct Frame {
     pub overlapped: bool,
     /// The transparent pass of the last frame (`None`: the scene has no transparent draws).
     pub transparency: Option<transparent::TransparencyStats>,
+    /// Each NURBS patch's tessellation level in the last frame, in the scene's order (adaptive
+    /// levels as the GPU chose them; empty without patches).
+    pub tess_levels: Vec<u32>,
 }
 
 impl Frame {

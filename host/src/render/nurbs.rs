@@ -161,6 +161,12 @@ impl Tessellation {
         self.control_points.write(&relative)
     }
 
+    /// Each patch's level in the headers (adaptive levels: as the level kernel last wrote them).
+    pub fn levels(&mut self) -> VkResult<Vec<u32>> {
+        let n = self.params.patch_count as usize;
+        Ok(self.headers.read::<shaders::layout::NurbsPatchGpu>(n)?.iter().map(|h| h.level).collect())
+    }
+
     /// The patches' headers on the GPU (adaptive levels: the level kernel writes their levels).
     pub fn headers_mut(&mut self) -> &mut Buffer {
         &mut self.headers

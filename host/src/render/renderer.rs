@@ -412,6 +412,10 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
         grid: res.grid,
         overlapped,
         transparency: r.transparency,
+        tess_levels: match &mut res.tessellation {
+            Some(t) => t.levels()?,
+            None => Vec::new(),
+        },
     })
 }
 

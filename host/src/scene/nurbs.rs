@@ -305,3 +305,82 @@ pub fn teapot() -> Vec<NurbsPatch> {
 #[cfg(test)]
 #[path = "nurbs_tests.rs"]
 mod tests;
+
+/// The surface point of `patch` at `(u, v)` in f64 (The NURBS Book A2.1, A2.2 and A4.3 with
+/// Cartesian points and weights): the exact surface the accuracy study measures tessellations
+/// against. Parameters are clamped to the valid domain.
+pub fn point_f64(patch: &NurbsPatch, u: f64, v: f64) -> DVec3 {
+    let (su, nu) = basis_f64(&patch.knots_u, patch.degree_u as usize, patch.size_u as usize, u);
+    let (sv, nv) = basis_f64(&patch.knots_v, patch.degree_v as usize, patch.size_v as usize, v);
+    let (p, q) = (patch.degree_u as usize, patch.degree_v as usize);
+    let (mut sum, mut w) = (DVec3::ZERO, 0.0);
+    for (l, bv) in nv.iter().enumerate() {
+        for (k, bu) in nu.iter().enumerate() {
+            let idx = (sv - q + l) * patch.size_u as usize + (su - p + k);
+            let wk = patch.weights[idx] as f64 * bu * bv;
+            sum += Vec3::from_array(patch.control_points[idx]).as_dvec3() * wk;
+            w += wk;
+        }
+    }
+    sum / w
+}
+
+/// The valid parameter domain `[u_p, u_{n+1}] × [v_q, v_{m+1}]` of `patch`, in f64.
+pub fn domain_f64(patch: &NurbsPatch) -> [f64; 4] {
+    let (p, q) = (patch.degree_u as usize, patch.degree_v as usize);
+    [patch.knots_u[p] as f64, patch.knots_u[patch.size_u as usize] as f64, patch.knots_v[q] as f64, patch.knots_v[patch.size_v as usize] as f64]
+}
+
+/// A2.1 and A2.2 in f64: the span of `t` (the last non-empty span at the domain's end) and the
+/// `p + 1` basis functions that do not vanish there.
+fn basis_f64(knots: &[f32], p: usize, size: usize, t: f64) -> (usize, Vec<f64>) {
+    let k = |i: usize| knots[i] as f64;
+    let (lo, hi) = (k(p), k(size));
+    let t = t.clamp(lo, hi);
+    let mut span = p;
+    while span + 1 < size && k(span + 1) <= t && (t < hi || k(span + 1) < hi) {
+        span += 1;
+    }
+    let (mut n, mut left, mut right) = (vec![0.0; p + 1], vec![0.0; p + 1], vec![0.0; p + 1]);
+    n[0] = 1.0;
+    for j in 1..=p {
+        left[j] = t - k(span + 1 - j);
+        right[j] = k(span + j) - t;
+        let mut saved = 0.0;
+        for r in 0..j {
+            let temp = n[r] / (right[r + 1] + left[j - r]);
+            n[r] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        n[j] = saved;
+    }
+    (span, n)
+}
+
+/// The largest distance between `patch` tessellated at `level` (the renderer's grid and
+/// triangles: `shaders::nurbs::tessellate_indices`) and the exact surface, in f64: sampled at
+/// each triangle's centroid and edge midpoints, where a flat triangle strays furthest from a
+/// smooth surface between its exact vertices.
+pub fn tessellation_error(patch: &NurbsPatch, level: u32) -> f64 {
+    let level = level.max(1) as usize;
+    let [u0, u1, v0, v1] = domain_f64(patch);
+    let param = |i: usize, j: usize| (u0 + (u1 - u0) * i as f64 / level as f64, v0 + (v1 - v0) * j as f64 / level as f64);
+    let grid: Vec<(f64, f64, DVec3)> = (0..=level).flat_map(|j| (0..=level).map(move |i| (i, j))).map(|(i, j)| {
+        let (u, v) = param(i, j);
+        (u, v, point_f64(patch, u, v))
+    }).collect();
+    const SAMPLES: [[f64; 3]; 4] = [[1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]];
+    let mut worst = 0f64;
+    for quad in 0..(level * level) as u32 {
+        let t = shaders::nurbs::tessellate_indices(level as u32, quad);
+        for tri in [[t[0], t[1], t[2]], [t[3], t[4], t[5]]] {
+            let [a, b, c] = tri.map(|i| grid[i as usize]);
+            for w in SAMPLES {
+                let (u, v) = (w[0] * a.0 + w[1] * b.0 + w[2] * c.0, w[0] * a.1 + w[1] * b.1 + w[2] * c.1);
+                let flat = a.2 * w[0] + b.2 * w[1] + c.2 * w[2];
+                worst = worst.max((point_f64(patch, u, v) - flat).length());
+            }
+        }
+    }
+    worst
+}

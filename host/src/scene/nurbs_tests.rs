@@ -226,3 +226,32 @@ fn description_patches_load_and_bad_ones_are_named() {
     let e = description_err(&table(&format!("{good}\nknot_u = [0, 1]")));
     assert!(e.contains("unknown field `knot_u`") && !e.contains('\n'), "{e}");
 }
+
+/// The f64 evaluator: the exact sphere's points at radius 1 to 1e-12 (the f32 data's rounding of
+/// √½ aside: weights and points are f32, so 1e-7), the f32 kernel's grid within f32 rounding of
+/// it, and the tessellation error: 0 for a flat patch, falling about fourfold per doubled level
+/// on the sphere, within 1 % of the analytic sagitta of its equator (a chord of angle 2π/L
+/// strays `1 − cos(π/L)` from the circle).
+#[test]
+fn the_f64_surface_and_the_tessellation_error() {
+    let s = sphere(Vec3::ZERO, 1.0);
+    let [u0, u1, v0, v1] = domain_f64(&s);
+    for k in 0..200 {
+        let (u, v) = (u0 + (u1 - u0) * (k as f64 * 0.618).fract(), v0 + (v1 - v0) * (k as f64 * 0.377).fract());
+        let r = point_f64(&s, u, v).length();
+        assert!((r - 1.0).abs() < 1e-6, "sphere at ({u}, {v}): radius {r}");
+    }
+    for (v, p) in grid(&s, 8).iter().enumerate() {
+        let (i, j) = (v % 9, v / 9);
+        let exact = point_f64(&s, u0 + (u1 - u0) * i as f64 / 8.0, v0 + (v1 - v0) * j as f64 / 8.0);
+        assert!((p.position.as_dvec3() - exact).length() < 1e-5, "vertex ({i}, {j})");
+    }
+    assert!(tessellation_error(&bilinear(), 4) < 1e-6, "a flat patch has no tessellation error");
+    let e: Vec<f64> = [4, 8, 16, 32].iter().map(|&l| tessellation_error(&s, l)).collect();
+    for w in e.windows(2) {
+        assert!(w[1] < w[0] / 3.0 && w[1] > w[0] / 5.0, "errors {e:?} should fall about fourfold per doubled level");
+    }
+    // At level 16 the quads' diagonals stray a little more than the equator's chords.
+    let sagitta = 1.0 - (std::f64::consts::PI / 16.0).cos();
+    assert!(e[2] >= sagitta * 0.99, "level 16: {} against the equator's sagitta {sagitta}", e[2]);
+}
