@@ -170,7 +170,8 @@ fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Prec
 }
 
 fn pass(f: &Frame, name: &str) -> f64 {
-    f.timings.iter().filter(|t| t.name == name).map(|t| t.ms).sum()
+    // `+ 0.0`: an empty float sum is −0.0, which the tables would print as "-0.000".
+    f.timings.iter().filter(|t| t.name == name).map(|t| t.ms).sum::<f64>() + 0.0
 }
 
 /// Frame and compute ms as in the sweep: the whole GPU frame over both queues, and the frame
