@@ -218,3 +218,31 @@ fn accuracy_study_tessellation_knob() {
     assert!(rows.iter().all(|r| r.num("tessellation_gbuffer_ms") > 0.0), "the tessellation pass and the G-buffer are timed");
     assert!(std::fs::read_to_string(dir.join("pareto-tessellation-nurbs.svg")).expect("tessellation pareto plot").starts_with("<svg"));
 }
+
+/// `--camera-path`: every configuration also flies the path, one frame per camera, and reports
+/// median ≤ 99th percentile ≤ max frame time over it (`flythrough.csv`, `results.md`); a path
+/// with a malformed line is a one-line error naming its file and line.
+#[test]
+fn bench_flies_a_camera_path() {
+    let dir = TempDir::new("bench-path");
+    let path = dir.join("path.txt");
+    std::fs::write(&path, "# down the avenue\n0,20,60,0,-10\n0,20,40,10,-10\n0,20,20,20,-15\n").unwrap();
+    let out = dir.path().to_str().unwrap();
+    let run = manylights([
+        "bench", "--lights", "200", "--scenes", "city", "--techniques", "clustered-bvh,tiled", "--width", "64", "--height", "36", "--frames", "1", "--camera-path", path.to_str().unwrap(),
+        "--out", out,
+    ]);
+    assert!(run.ok, "bench failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("flythrough.csv"));
+    let rows: Vec<_> = csv.rows().collect();
+    assert_eq!(rows.len(), 2, "one fly-through per configuration");
+    for r in &rows {
+        assert_eq!(r.get("frames"), "3", "{:?}", r.cells);
+        assert!(r.num("median_ms") > 0.0 && r.num("median_ms") <= r.num("p99_ms") && r.num("p99_ms") <= r.num("max_ms"), "{:?}", r.cells);
+    }
+    let md = std::fs::read_to_string(dir.join("results.md")).unwrap();
+    assert!(md.contains("## Fly-through"), "{md}");
+    std::fs::write(&path, "0,20,60,0,-10\n0,20\n").unwrap();
+    let bad = manylights(["bench", "--lights", "200", "--scenes", "city", "--width", "64", "--height", "36", "--camera-path", path.to_str().unwrap(), "--out", out]);
+    assert_one_line_error(&bad, "a malformed path", "path.txt:2");
+}

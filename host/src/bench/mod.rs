@@ -21,6 +21,7 @@
 //! main queue's raster passes (each pass row says its `kind`), because a GPU may give raster work
 //! only part of the chip (the H100 and H200 run it on 2 of their TPCs) — both are reported.
 pub mod accuracy;
+pub mod flythrough;
 pub mod plots;
 pub mod report;
 
@@ -98,6 +99,11 @@ pub struct BenchArgs {
     /// key) for every scene of the sweep, instead of each scene's own camera.
     #[arg(long, value_parser = crate::scene::bookmark::parse_arg, allow_hyphen_values = true)]
     pub camera: Option<crate::scene::bookmark::Bookmark>,
+    /// A camera path (one bookmark per line): each configuration also flies it, one frame per
+    /// camera, and reports the frame time's median, 99th percentile and maximum
+    /// (`flythrough.csv`, `results.md`).
+    #[arg(long)]
+    pub camera_path: Option<PathBuf>,
 }
 
 /// Loads scene `name` of the sweep, with `--camera` where given.
@@ -160,6 +166,8 @@ pub struct Results {
     pub command: String,
     pub rows: Vec<Row>,
     pub skips: Vec<Skip>,
+    /// Fly-throughs of `--camera-path`, one per configuration measured.
+    pub flythrough: Vec<flythrough::FlyRow>,
 }
 
 /// The techniques named by `--techniques`.
@@ -231,7 +239,14 @@ pub const CLUSTER_PAIRS_CPU: u64 = 100_000_000;
 pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
     let l = lights::uniform(scene, n, a.seed).context("generating lights")?;
     let flat = flatten(scene, Precision::Oct16)?;
-    let s = Settings {
+    let s = settings_of(a, t);
+    let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
+    run_rows(frame, name, t, n, a)
+}
+
+/// The settings of a configuration of the sweep.
+pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
+    Settings {
         width: a.width,
         height: a.height,
         tile_size: a.tile_size,
@@ -246,8 +261,11 @@ pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, 
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
-    };
-    let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
+    }
+}
+
+/// The rows of a configuration's measured frame.
+fn run_rows(frame: render::Frame, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
     ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");
     let bytes: u64 = frame.buffers.iter().map(|b| b.1).sum();
     let light_lists = match t {
@@ -318,6 +336,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} [{elapsed} / ~{duration}]").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut out = Results { device: gpu.ctx.info.line(), frame_spans_queues: gpu.ctx.info.timestamps_across_queues, command, ..Default::default() };
+    let path = a.camera_path.as_deref().map(flythrough::load_path).transpose()?;
     // Warm-up: a GPU idle before the sweep starts at low clocks and ramps up over seconds; one
     // warm-up frame per configuration does not undo that for the first configurations. On a cold
     // H100, 2 s of deferred frames left Forward+'s first configuration (raster-bound) 2× slow,
@@ -350,6 +369,12 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
                     match run_config(gpu, &scene, name, t, n, a) {
                         Ok(rows) => out.rows.extend(rows),
                         Err(e) => out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why: format!("{e:#}") }),
+                    }
+                    if let Some(cameras) = &path {
+                        match flythrough::fly(gpu, &scene, name, t, n, a, cameras) {
+                            Ok(row) => out.flythrough.push(row),
+                            Err(e) => out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why: format!("fly-through: {e:#}") }),
+                        }
                     }
                 }
                 bar.inc(1);
@@ -440,7 +465,12 @@ pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
     write_csv(&r, &mut f).and_then(|_| f.flush()).with_context(|| format!("writing {}", csv.display()))?;
     let plots = plots::draw_all(&r, &a.out).context("drawing the plots")?;
     let md = a.out.join("results.md");
-    std::fs::write(&md, report::markdown(&r, &plots)).with_context(|| format!("writing {}", md.display()))?;
+    std::fs::write(&md, report::markdown(&r, &plots) + &flythrough::markdown(&r.flythrough)).with_context(|| format!("writing {}", md.display()))?;
+    if !r.flythrough.is_empty() {
+        let fly = a.out.join("flythrough.csv");
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&fly).with_context(|| format!("creating {}", fly.display()))?);
+        flythrough::write_csv(&r.flythrough, &mut f).and_then(|_| f.flush()).with_context(|| format!("writing {}", fly.display()))?;
+    }
     for s in &r.skips {
         eprintln!("skipped {} {} {} lights: {}", s.scene, technique_name(s.technique), s.lights, s.why);
     }
