@@ -93,6 +93,28 @@ pub struct RenderArgs {
     pub assets: PathBuf,
 }
 
+impl RenderArgs {
+    /// The renderer's settings from the flags: `frames` timed frames, `read_back` for the stats.
+    pub fn settings(&self, frames: u32, read_back: bool) -> Settings {
+        Settings {
+            width: self.frame.width,
+            height: self.frame.height,
+            tile_size: self.frame.tile_size,
+            technique: self.technique,
+            view: self.view,
+            normal_precision: self.normal_precision,
+            exposure: 1.0,
+            frames,
+            read_back,
+            bvh_branching: self.bvh_branching.unwrap_or(0),
+            async_compute: !self.no_async_compute,
+            sort: self.sort,
+            fp_lists: self.fp_lists,
+            oit: self.oit,
+        }
+    }
+}
+
 /// Checks what can be checked before loading anything: the frame's size and tile against the
 /// grid's and the device's limits, `--lights` against what the technique takes on the device,
 /// and the output's directory.
@@ -171,22 +193,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
     let mut input = scene_input(&scene, &flat, &scene.lights);
     input.nurbs_tolerance = a.tess_error;
-    let settings = Settings {
-        width: a.frame.width,
-        height: a.frame.height,
-        tile_size: a.frame.tile_size,
-        technique: a.technique,
-        view: a.view,
-        normal_precision: a.normal_precision,
-        exposure: 1.0,
-        frames: a.frames,
-        read_back: a.stats.is_some(),
-        bvh_branching: a.bvh_branching.unwrap_or(0),
-        async_compute: !a.no_async_compute,
-        sort: a.sort,
-        fp_lists: a.fp_lists,
-        oit: a.oit,
-    };
+    let settings = a.settings(a.frames, a.stats.is_some());
     let patches = if scene.nurbs.is_empty() { String::new() } else { format!(", {} NURBS patches", scene.nurbs.len()) };
     eprintln!("rendering {} ({} triangles{patches}, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;

@@ -71,22 +71,7 @@ impl Viewer {
         let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
         let (lo, hi) = scene.bounds;
         let speed = ((hi - lo).length() / 30.0).max(0.1);
-        let settings = Settings {
-            width: a.frame.width,
-            height: a.frame.height,
-            tile_size: a.frame.tile_size,
-            technique: a.technique,
-            view: a.view,
-            normal_precision: a.normal_precision,
-            exposure: 1.0,
-            frames: 0,
-            read_back: false,
-            bvh_branching: a.bvh_branching.unwrap_or(0),
-            async_compute: !a.no_async_compute,
-            sort: a.sort,
-            fp_lists: a.fp_lists,
-            oit: a.oit,
-        };
+        let settings = a.settings(0, false);
         let time = a.time.unwrap_or(0.0);
         let lights = lights::animate(&base_lights, time);
         Ok(Self {
