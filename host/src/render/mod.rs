@@ -38,6 +38,7 @@ pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
+pub mod light_types;
 pub mod reference;
 pub mod renderer;
 pub mod scan;
@@ -123,6 +124,10 @@ pub struct SceneInput<'a> {
     pub draws: Vec<Draw>,
     pub materials: Vec<MaterialGpu>,
     pub lights: &'a [PointLight],
+    /// Per light, its cone if it is a spot light; empty when no light is (`light_types`).
+    pub spots: &'a [Option<light_types::Spot>],
+    /// Directional lights (at most `shaders::light_types::MAX_DIRECTIONAL_LIGHTS`).
+    pub directional: &'a [light_types::Directional],
     /// Textures the draws index (`Draw::albedo_texture` / `mask_texture`).
     pub textures: Vec<TextureData<'a>>,
     /// World → view, in f64: the renderer draws camera-relative ([`camera_relative`]).
