@@ -436,3 +436,27 @@ fn spot_and_directional_lights_equal_the_reference() {
     assert!(with_sun > without + reference.pixels.len() / 10, "directional lights light more of the frame: {with_sun} lit pixels, {without} without them");
     common::assert_clean(&gpu);
 }
+
+/// Spot lights culled by their cones in `clustered-naive` and `clustered-bvh` (every branching and
+/// sort of [`assert_equal_to_reference`]): the frames equal the reference, every cluster list
+/// equals the CPU's naive search with the cone test and holds every light whose cone reaches a
+/// pixel of the cluster (`reference::check`), and the lists are shorter than the same lights'
+/// as points.
+#[test]
+fn clustered_techniques_cull_spot_lights_by_their_cones() {
+    let gpu = common::gpu();
+    let base = city();
+    let l = lights::uniform(&base, 1_000, 5).unwrap();
+    let mut spots = base.clone();
+    spots.add_lights(l.iter().copied().zip(lights::spot_cones(l.len(), 0.7, 5).unwrap()));
+    let mut points = base.clone();
+    points.lights = l.clone();
+    let with_cones = assert_equal_to_reference(&gpu, &spots, &spots.lights, 160, 90, "spots");
+    let as_points = frame(&gpu, &points, &points.lights, &settings(160, 90, Technique::ClusteredNaive));
+    assert!(
+        with_cones.light_refs * 10 < as_points.light_refs * 9,
+        "cone culling: {} light references with spots, {} with the same lights as points",
+        with_cones.light_refs,
+        as_points.light_refs
+    );
+}

@@ -41,6 +41,9 @@ pub const EFFECT_SPOT: u32 = 64;
 /// The scene has directional lights: the count is in the effect word's bits
 /// [`DIRECTIONAL_COUNT_SHIFT`]`..` (at most [`MAX_DIRECTIONAL_LIGHTS`]).
 pub const EFFECT_DIRECTIONAL: u32 = 128;
+/// Accuracy study: spot lights are culled by their range sphere only (no cone test): the image
+/// is the same, the lists longer.
+pub const EFFECT_CULL_SPHERE_ONLY: u32 = 2048;
 /// First bit of the directional-light count in the effect word (3 bits).
 pub const DIRECTIONAL_COUNT_SHIFT: u32 = 8;
 /// Most directional lights a scene may have (a small fixed loop in every shading pass).
@@ -107,6 +110,23 @@ pub fn cone_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u3
     }
     let cone = cone_of(lights, num_lights, l);
     is_point(&cone) || cone_meets_sphere(Vec3::from_array(light.position), &cone, light.radius, c, r)
+}
+
+/// [`cone_may_meet`] for light index `l`, its record read only with [`EFFECT_SPOT`] and
+/// without [`EFFECT_CULL_SPHERE_ONLY`] (the accuracy study's "sphere" culling of spots).
+#[inline]
+pub fn spot_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u32, c: Vec3, r: f32) -> bool {
+    if effects & EFFECT_SPOT == 0 || effects & EFFECT_CULL_SPHERE_ONLY != 0 {
+        return true;
+    }
+    let light = lights[l as usize];
+    cone_may_meet(effects, lights, num_lights, l, &light, c, r)
+}
+
+/// The bounding sphere `(centre, radius)` of a box: what the cone tests take for a cluster.
+#[inline]
+pub fn box_sphere(min: Vec3, max: Vec3) -> (Vec3, f32) {
+    ((min + max) * 0.5, (max - min).length() * 0.5)
 }
 
 /// The cone record of a spot light (module docs).

@@ -28,8 +28,11 @@
 //! Cost per light–cluster pair: 2 dot products, a square root, 3 comparisons. Memory: none; the
 //! light's direction and cone cosines come with it.
 //!
-//! Status: the model and the tests, CPU-tested; lights are still points in every technique (the
-//! light layout has no type yet), so nothing calls these on the GPU.
+//! Where it runs: every shading pass multiplies a spot's light by [`spot_factor`]
+//! (`shading::shade_lights`); `clustered-naive` and `clustered-bvh` (at the BVH's leaves) cull
+//! spots with [`cone_meets_sphere`] against the bounding sphere of each cluster's box
+//! (`light_types::spot_may_meet`); the other techniques cull spots by their range sphere alone
+//! (conservative: the same image, longer lists).
 use glam::Vec3;
 #[cfg(target_arch = "spirv")]
 use spirv_std::num_traits::Float;

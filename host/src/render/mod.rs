@@ -183,6 +183,11 @@ pub struct Readback {
     pub offsets: Vec<u32>,
     pub list: Vec<u32>,
     pub lights_view: Vec<PointLight>,
+    /// The light buffer as the kernels read it (`lights_view`, then cone and directional
+    /// records where the scene has them: `shaders::light_types`).
+    pub light_records: Vec<PointLight>,
+    /// The frame's light-type bits (`EFFECT_SPOT`, `EFFECT_CULL_SPHERE_ONLY`) the culling used.
+    pub light_effects: u32,
     pub grid: ClusterGrid,
     pub bounds: Vec<f32>,
     /// Each screen tile's light list as the GPU stored it (`forward-plus`; empty otherwise).

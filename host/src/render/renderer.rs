@@ -382,6 +382,8 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
             offsets: c.offsets,
             list: c.list,
             lights_view: res.lights_view.clone(),
+            light_records: light_records(&res.view, &res.lights_view, &res.spots, &res.directional)?,
+            light_effects: res.params.effects & (shaders::light_types::EFFECT_SPOT | shaders::light_types::EFFECT_CULL_SPHERE_ONLY),
             grid: res.grid,
             bounds: res.bounds.clone(),
             tile_lists: r.tile_lists,
