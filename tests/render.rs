@@ -438,10 +438,12 @@ fn spot_and_directional_lights_equal_the_reference() {
 }
 
 /// Spot lights culled by their cones in `clustered-naive` and `clustered-bvh` (every branching and
-/// sort of [`assert_equal_to_reference`]): the frames equal the reference, every cluster list
+/// sort of [`assert_equal_to_reference`]; the other techniques in
+/// `spot_and_directional_lights_equal_the_reference`): the frames equal the reference, every cluster list
 /// equals the CPU's naive search with the cone test and holds every light whose cone reaches a
 /// pixel of the cluster (`reference::check`), and the lists are shorter than the same lights'
-/// as points.
+/// as points, and so are the longest lists of `tiled` and `tiled-2.5d` and the references of
+/// `clustered-aabb`.
 #[test]
 fn clustered_techniques_cull_spot_lights_by_their_cones() {
     let gpu = common::gpu();
@@ -459,4 +461,11 @@ fn clustered_techniques_cull_spot_lights_by_their_cones() {
         with_cones.light_refs,
         as_points.light_refs
     );
+    // The tile and cluster-box techniques cull by cone too: their longest tile lists and the
+    // cluster boxes' references shrink.
+    for t in [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb] {
+        let (a, b) = (frame(&gpu, &spots, &spots.lights, &settings(160, 90, t)), frame(&gpu, &points, &points.lights, &settings(160, 90, t)));
+        let (a, b) = if t == Technique::ClusteredAabb { (a.light_refs, b.light_refs) } else { (a.max_list, b.max_list) };
+        assert!(a < b, "{t:?}: {a} light references (longest list for tiles) with spots, {b} as points");
+    }
 }

@@ -29,10 +29,11 @@
 //! light's direction and cone cosines come with it.
 //!
 //! Where it runs: every shading pass multiplies a spot's light by [`spot_factor`]
-//! (`shading::shade_lights`); `clustered-naive` and `clustered-bvh` (at the BVH's leaves) cull
-//! spots with [`cone_meets_sphere`] against the bounding sphere of each cluster's box
-//! (`light_types::spot_may_meet`); the other techniques cull spots by their range sphere alone
-//! (conservative: the same image, longer lists).
+//! (`shading::shade_lights`); every technique culls spots with [`cone_meets_sphere`] after its
+//! range test (`light_types::spot_may_meet`), against the bounding sphere of what it culls for:
+//! the cluster's box (`clustered-naive`, `clustered-aabb`, and `clustered-bvh` at the BVH's
+//! leaves — its nodes keep range spheres) or the tile's frustum slice (`tiled`, `tiled-2.5d`,
+//! `forward-plus`: `tile_cull::TileFrustum::bounding_sphere`).
 use glam::Vec3;
 #[cfg(target_arch = "spirv")]
 use spirv_std::num_traits::Float;

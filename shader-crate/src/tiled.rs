@@ -92,7 +92,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     while next < n {
         let mut count = 0;
         while next < n && count + CULL_BATCH <= LIST_CAPACITY {
-            let kept = cull.keep_batch(c, s, lights, n, next);
+            let kept = cull.keep_batch(c, s, lights, n, next, fp.effects);
             kept.emit(|k, light| s.store(SHARED_LIST + count + k, light));
             count += kept.total;
             next += CULL_BATCH;
