@@ -107,7 +107,7 @@ fn tiny_accuracy_study() {
     let run = manylights(["bench", "--study", "accuracy", "--lights", "10000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "1", "--out", out]);
     assert!(run.ok, "study failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("accuracy.csv"));
-    assert_eq!(csv.rows.len(), 14, "{:?}", csv.rows);
+    assert_eq!(csv.rows.len(), 16, "{:?}", csv.rows);
     let setting = |prefix: &str| {
         let mut rows = csv.rows().filter(|r| r.get("setting").starts_with(prefix));
         let row = rows.next().unwrap_or_else(|| panic!("no setting {prefix:?}"));
@@ -135,6 +135,11 @@ fn tiny_accuracy_study() {
         assert!(max_abs(test) <= 1.0, "culling test {test} is conservative: the reference image");
     }
     assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–AABB"), "the exact test keeps no more lights than the box");
+    // Spot lights: the cone test changes the lists, not the image.
+    for test in ["spots: cone", "spots: sphere"] {
+        assert!(max_abs(test) <= 1.0, "culling test {test} is conservative: the reference image");
+    }
+    assert!(per_cluster("spots: cone") < per_cluster("spots: sphere"), "the cone test keeps fewer lights than the range sphere");
     assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–frustum planes"), "the exact test keeps no more lights than the planes");
     let (e2, e3, e4) = (psnr("inverse square cut at ε = 1e-2"), psnr("inverse square cut at ε = 1e-3"), psnr("inverse square cut at ε = 1e-4"));
     assert!(e2 <= e3 && e3 <= e4, "a smaller cut threshold is never less accurate: {e2} {e3} {e4}");

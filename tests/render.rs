@@ -4,14 +4,14 @@
 //! holds every light touching it, and the hard cases stay finite and equal.
 mod common;
 use common::pixels::{lit, worst_channel};
-use common::render::{asset_scene, city, frame, render_error};
+use common::render::{asset_scene, city, frame, label, render_error, runs};
 use common::scenes::hard_light_cases;
 use host::gpu::Gpu;
 use host::render::forward_plus::TileLists;
 use host::render::sort::SortKind;
 use host::render::transparent::OitVariant;
 use host::render::{reference, Frame, Settings, Technique};
-use host::scene::{lights, Scene};
+use host::scene::{lights, Directional, Scene};
 use shaders::layout::PointLight;
 use shaders::octahedral::Precision;
 
@@ -394,5 +394,78 @@ fn bunny_and_sponza_when_present() {
             let l = lights::uniform(&scene, n, 5).unwrap();
             assert_equal_to_reference(&gpu, &scene, &l, 160, 90, &format!("{name} {n}"));
         }
+    }
+}
+
+/// Spot and directional lights: every technique equals the brute-force reference within 1/255 on
+/// the city with half of 300 lights spots (and the other half points in the same scene) and two
+/// directional lights; the cones cut light (the frame differs from the same lights as points,
+/// and is nowhere brighter) and the directional lights add light where the punctual ones do not
+/// reach.
+#[test]
+fn spot_and_directional_lights_equal_the_reference() {
+    let gpu = common::gpu();
+    let base = city();
+    let l = lights::uniform(&base, 300, 11).unwrap();
+    let mut points = base.clone();
+    points.lights = l.clone();
+    let mut spots = base.clone();
+    spots.add_lights(l.iter().copied().zip(lights::spot_cones(l.len(), 0.5, 11).unwrap()));
+    let n_spots = spots.spots.iter().flatten().count();
+    assert!(spots.spots.len() == l.len() && n_spots * 3 > l.len() && n_spots * 3 < 2 * l.len(), "about half the lights are spots: {n_spots}");
+    let mut all = spots.clone();
+    all.directional = vec![
+        Directional { direction: glam::Vec3::new(0.3, -1.0, 0.2), colour: [1.0, 0.95, 0.9], intensity: 0.5 },
+        Directional { direction: glam::Vec3::new(-0.5, -0.3, -1.0), colour: [0.3, 0.4, 1.0], intensity: 0.25 },
+    ];
+    let s = |(technique, fp_lists)| Settings { technique, fp_lists, ..common::render::settings(160, 90, technique) };
+    let deferred = |scene: &Scene| frame(&gpu, scene, &scene.lights, &s((Technique::Deferred, TileLists::Array)));
+    let (reference, point_frame, spot_frame) = (deferred(&all), deferred(&points), deferred(&spots));
+    for run in runs(Technique::ALL) {
+        for (scene, what, want) in [(&spots, "spot lights", &spot_frame), (&all, "spots and directional lights", &reference)] {
+            let f = frame(&gpu, scene, &scene.lights, &s(run));
+            let worst = worst_channel(&want.pixels, &f.pixels);
+            assert!(worst <= 1, "{}, {what}: differs from deferred by {worst}/255", label(run));
+        }
+    }
+    let luma = |p: u32| (p & 255) + ((p >> 8) & 255) + ((p >> 16) & 255);
+    let darker = spot_frame.pixels.iter().zip(&point_frame.pixels).filter(|(a, b)| luma(**a) + 3 < luma(**b)).count();
+    let brighter = spot_frame.pixels.iter().zip(&point_frame.pixels).filter(|(a, b)| luma(**a) > luma(**b) + 3).count();
+    assert!(darker * 50 > spot_frame.pixels.len() && brighter == 0, "the cones cut light: {darker} pixels darker, {brighter} brighter");
+    let (with_sun, without) = (lit(&reference.pixels), lit(&spot_frame.pixels));
+    assert!(with_sun > without + reference.pixels.len() / 10, "directional lights light more of the frame: {with_sun} lit pixels, {without} without them");
+    common::assert_clean(&gpu);
+}
+
+/// Spot lights culled by their cones in `clustered-naive` and `clustered-bvh` (every branching and
+/// sort of [`assert_equal_to_reference`]; the other techniques in
+/// `spot_and_directional_lights_equal_the_reference`): the frames equal the reference, every cluster list
+/// equals the CPU's naive search with the cone test and holds every light whose cone reaches a
+/// pixel of the cluster (`reference::check`), and the lists are shorter than the same lights'
+/// as points, and so are the longest lists of `tiled` and `tiled-2.5d` and the references of
+/// `clustered-aabb`.
+#[test]
+fn clustered_techniques_cull_spot_lights_by_their_cones() {
+    let gpu = common::gpu();
+    let base = city();
+    let l = lights::uniform(&base, 1_000, 5).unwrap();
+    let mut spots = base.clone();
+    spots.add_lights(l.iter().copied().zip(lights::spot_cones(l.len(), 0.7, 5).unwrap()));
+    let mut points = base.clone();
+    points.lights = l.clone();
+    let with_cones = assert_equal_to_reference(&gpu, &spots, &spots.lights, 160, 90, "spots");
+    let as_points = frame(&gpu, &points, &points.lights, &settings(160, 90, Technique::ClusteredNaive));
+    assert!(
+        with_cones.light_refs * 10 < as_points.light_refs * 9,
+        "cone culling: {} light references with spots, {} with the same lights as points",
+        with_cones.light_refs,
+        as_points.light_refs
+    );
+    // The tile and cluster-box techniques cull by cone too: their longest tile lists and the
+    // cluster boxes' references shrink.
+    for t in [Technique::Tiled, Technique::Tiled25d, Technique::ClusteredAabb] {
+        let (a, b) = (frame(&gpu, &spots, &spots.lights, &settings(160, 90, t)), frame(&gpu, &points, &points.lights, &settings(160, 90, t)));
+        let (a, b) = if t == Technique::ClusteredAabb { (a.light_refs, b.light_refs) } else { (a.max_list, b.max_list) };
+        assert!(a < b, "{t:?}: {a} light references (longest list for tiles) with spots, {b} as points");
     }
 }

@@ -43,6 +43,10 @@ pub struct RenderArgs {
     pub frames: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Share of the `--lights` that are spot lights (random cones pointing mostly down,
+    /// `lights::spot_cones`), in [0, 1]; scene descriptions use `[lights] spot_fraction`.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_fraction)]
+    pub spot_fraction: f32,
     /// What the frame shows.
     #[arg(long, value_parser = frame_view_parser(), default_value = "shaded")]
     pub view: View,
@@ -180,7 +184,12 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         if a.lights == 0 {
             bail_input!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
         }
-        scene.lights = lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?;
+        let generated = lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?;
+        let cones = lights::spot_cones(generated.len(), a.spot_fraction, a.seed).map_err(bad_input)?;
+        let n = generated.len();
+        scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
+    } else if a.spot_fraction > 0.0 {
+        bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)");
     }
     if let Some(t) = a.time {
         scene.lights = lights::animate(&scene.lights, t);
@@ -220,4 +229,13 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
     eprintln!("wrote {}", a.frame.out.display());
     Ok(())
+}
+
+/// A value in [0, 1] (`--spot-fraction`).
+fn parse_fraction(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        Ok(v) => Err(format!("{v} is not in [0, 1]")),
+        Err(e) => Err(e.to_string()),
+    }
 }

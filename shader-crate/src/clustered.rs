@@ -21,7 +21,8 @@
 #![allow(clippy::too_many_arguments)]
 
 use crate::layout::*;
-use crate::light_lists::lights_meeting;
+use crate::light_lists::{lights_meeting, lights_meeting_spots};
+use crate::light_types::{box_sphere, EFFECT_SPOT};
 use crate::page_table::{self, INVALID_KEY};
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
 use crate::{cluster_bounds, cluster_test, lighting};
@@ -130,8 +131,22 @@ pub fn compact_clusters(
 pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLight], key: u32, emit: impl FnMut(u32, u32)) -> u32 {
     // The mode is uniform: one loop per test, so the default loop carries no other test's code.
     let mode = p.effects & (EFFECT_CULL_PLANES | EFFECT_CULL_EXACT);
+    let aabb = cluster_bounds::cluster_aabb_of_key(&p.grid, bounds, key);
+    if p.effects & EFFECT_SPOT != 0 {
+        // Spot lights: the same range tests, then the cone against the box's bounding sphere.
+        let (c0, r0) = box_sphere(spirv_std::glam::Vec3::from_array(aabb.min), spirv_std::glam::Vec3::from_array(aabb.max));
+        let (i, j, k) = p.grid.unpack(key);
+        let frustum = cluster_test::cluster_frustum(&p.grid, bounds, i, j, k);
+        let (e, n) = (p.effects, p.num_lights);
+        return if mode == 0 {
+            lights_meeting_spots(e, n, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb), c0, r0)
+        } else if mode == EFFECT_CULL_PLANES {
+            lights_meeting_spots(e, n, lights, emit, |c, r| !cluster_test::sphere_outside_planes(&frustum, c, r), c0, r0)
+        } else {
+            lights_meeting_spots(e, n, lights, emit, |c, r| cluster_test::sphere_meets_frustum(&frustum, c, r), c0, r0)
+        };
+    }
     if mode == 0 {
-        let aabb = cluster_bounds::cluster_aabb_of_key(&p.grid, bounds, key);
         return lights_meeting(p.num_lights, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb));
     }
     let (i, j, k) = p.grid.unpack(key);

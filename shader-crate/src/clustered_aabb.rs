@@ -37,6 +37,7 @@ use crate::coop::gpu::GpuCoop;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::light_lists::{subgroup_reserve, AtomicAdd, ListSink};
+use crate::light_types::{box_sphere, spot_may_meet};
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
 use crate::lighting;
 use glam::Vec3;
@@ -85,12 +86,14 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
     s: &mut S,
     lights: &[PointLight],
     num_lights: u32,
+    effects: u32,
     aabb: &ClusterAabb,
     active: bool,
     list: &mut L,
     base: u32,
     write: bool,
 ) -> u32 {
+    let (c0, r0) = box_sphere(Vec3::from_array(aabb.min), Vec3::from_array(aabb.max));
     let li = c.local_index();
     let mut n = 0;
     let mut batch = 0;
@@ -106,7 +109,10 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
                 unroll8!(u => {
                     if t + u < m {
                         let (centre, r) = staged_sphere(s, t + u);
-                        if lighting::sphere_intersects_aabb(centre, r, aabb) {
+                        // Spot lights (frame-uniform `EFFECT_SPOT`): the cone too, combined with
+                        // `&` (no short-circuit branch around the load, as in the BVH walk).
+                        let cone = spot_may_meet(effects, lights, num_lights, batch + t + u, c0, r0);
+                        if lighting::sphere_intersects_aabb(centre, r, aabb) & cone {
                             if write {
                                 list.put(base + n, batch + t + u);
                             }
@@ -117,7 +123,10 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
                 unroll8!(u => {
                     if t + 8 + u < m {
                         let (centre, r) = staged_sphere(s, t + 8 + u);
-                        if lighting::sphere_intersects_aabb(centre, r, aabb) {
+                        // Spot lights (frame-uniform `EFFECT_SPOT`): the cone too, combined with
+                        // `&` (no short-circuit branch around the load, as in the BVH walk).
+                        let cone = spot_may_meet(effects, lights, num_lights, batch + t + 8 + u, c0, r0);
+                        if lighting::sphere_intersects_aabb(centre, r, aabb) & cone {
                             if write {
                                 list.put(base + n, batch + t + 8 + u);
                             }
@@ -143,16 +152,17 @@ pub fn assign<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, L: ListSink
     s: &mut S,
     lights: &[PointLight],
     num_lights: u32,
+    effects: u32,
     aabb: &ClusterAabb,
     active: bool,
     refs: &mut A,
     list: &mut L,
     capacity: u32,
 ) -> (u32, u32) {
-    let count = staged_pass(c, s, lights, num_lights, aabb, active, list, 0, false);
+    let count = staged_pass(c, s, lights, num_lights, effects, aabb, active, list, 0, false);
     let base = subgroup_reserve(c, refs, count);
     let fits = active && base <= capacity && count <= capacity - base;
-    staged_pass(c, s, lights, num_lights, aabb, active, list, base, fits);
+    staged_pass(c, s, lights, num_lights, effects, aabb, active, list, base, fits);
     (base, count)
 }
 
@@ -256,7 +266,7 @@ pub fn aabb_assign(
     let cluster = if is_active { active[slot as usize] } else { 0 };
     let aabb = boxes[cluster as usize];
     let (base, count) =
-        assign(&co, shared, lights, p.num_lights, &aabb, is_active, &mut counters[AABB_COUNTER_REFS as usize], list, p.light_capacity);
+        assign(&co, shared, lights, p.num_lights, p.effects, &aabb, is_active, &mut counters[AABB_COUNTER_REFS as usize], list, p.light_capacity);
     if is_active {
         offsets[cluster as usize] = base;
         counts[cluster as usize] = count;

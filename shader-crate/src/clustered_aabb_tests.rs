@@ -70,7 +70,7 @@ fn staged_assignment_equals_brute_force() {
                 let aabb = if active { boxes[li] } else { boxes[0] };
                 let mut counter = Counting { value: &refs, calls: &calls };
                 let mut sink = SharedList { words: &words, highest: &highest };
-                assign(c, s, &lights, lights.len() as u32, &aabb, active, &mut counter, &mut sink, capacity)
+                assign(c, s, &lights, lights.len() as u32, 0, &aabb, active, &mut counter, &mut sink, capacity)
             });
             assert_eq!(refs.load(Ordering::Relaxed), need, "width {width}: the counter ends at the references needed");
             assert!(highest.load(Ordering::Relaxed) <= capacity, "width {width}: written past the capacity {capacity}");

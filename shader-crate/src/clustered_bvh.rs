@@ -100,11 +100,12 @@ pub fn cluster_lights_bvh<C: Coop>(
     spheres: &[LightSphere],
     order: &[u32],
     nodes: &[ClusterAabb],
+    lights: &[PointLight],
     key: u32,
     emit: impl FnMut(u32, u32),
 ) -> u32 {
     let f = &p.frame;
-    light_bvh::walk_subgroup(c, nodes, spheres, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), emit)
+    light_bvh::walk_subgroup(c, nodes, spheres, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), f.effects, lights, emit)
 }
 
 /// Lights per cluster that the counting walk also stores (the fill pass then copies them instead
@@ -162,6 +163,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] nodes: &[ClusterAabb],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] staged_lists: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
@@ -169,7 +171,7 @@ pub fn cluster_light_counts_bvh(
         return;
     }
     let n = if cl < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters))
+        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters))
     } else {
         0
     };
@@ -201,6 +203,7 @@ pub fn cluster_light_fill_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] nodes: &[ClusterAabb],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] staged_lists: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] counts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] lights: &[PointLight],
 ) {
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
@@ -215,6 +218,6 @@ pub fn cluster_light_fill_bvh(
     if staged(cl, count, p.staged_clusters) {
         copy_staged(&c, staged_lists, cl, count, base, |i, l| list[i as usize] = l);
     } else {
-        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
+        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
     }
 }

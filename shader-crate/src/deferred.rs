@@ -45,7 +45,8 @@ specular_entries! {
         let surface = shading::fetch_surface(p, i, z, normals, albedo[i as usize], materials);
         let all_lights = shading::light_range(0, p.num_lights);
         let mut sum = Vec3::ZERO;
-        shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, lights, &all_lights, &mut sum);
+        shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, p.num_lights, lights, &all_lights, &mut sum);
+        shading::shade_directional_lights::<SPECULAR>(&surface, p.effects, p.num_lights, lights, &mut sum);
         // The heatmap shows the lights that touch the pixel (the frame-uniform view: no divergence).
         let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };
         frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, touching);

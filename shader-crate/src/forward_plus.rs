@@ -118,7 +118,7 @@ pub fn cull_tile<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, H: Atomi
     let batch = c.num_subgroups() * c.subgroup_size() * LIGHTS_PER_INVOCATION;
     while next < n {
         let first = next + li * LIGHTS_PER_INVOCATION;
-        let (a, b) = cull.keeps_pair(lights, n, first);
+        let (a, b) = cull.keeps_pair(lights, n, first, p.frame.effects);
         let base = subgroup_reserve(c, counter, a as u32 + b as u32);
         if a {
             push(head, nodes, base, first, capacity);
@@ -247,7 +247,7 @@ pub fn cull_tile_array<C: Coop, S: SharedU32 + ?Sized, A: AtomicAdd + ?Sized, L:
     let (mut writing, mut written, mut base) = (false, 0u32, 0u32);
     let mut next = if cull.empty { n } else { 0 };
     while next < n {
-        let kept = cull.keep_batch(c, s, lights, n, next);
+        let kept = cull.keep_batch(c, s, lights, n, next, p.frame.effects);
         if writing {
             kept.emit(|k, light| put_in_range(indices, base, written + k, count, light, capacity));
             written += kept.total;

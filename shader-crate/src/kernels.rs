@@ -110,9 +110,9 @@ pub const BVH_LEAVES: Kernel<BvhParams> = Kernel::new("clustered_bvh::bvh_leaves
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
 /// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
 pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 8, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 9, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 10, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 11, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
 pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);

@@ -102,6 +102,7 @@ pub mod layout;
 pub mod light_bvh;
 #[cfg(feature = "compute")]
 pub mod light_lists;
+pub mod light_types;
 pub mod lighting;
 pub mod morton;
 pub mod nurbs;

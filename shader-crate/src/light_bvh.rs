@@ -345,7 +345,9 @@ fn pop_lowest(mask: &mut [u32; 2]) -> u32 {
 
 /// The subgroup-parallel walk: every lane of the subgroup calls it with the same `cluster` (in
 /// subgroup-uniform control flow). Lanes whose light meets the cluster call `emit(k, light)` with
-/// its dense slot `k`; every lane returns the cluster's count.
+/// its dense slot `k`; every lane returns the cluster's count. Spot lights (`effects` with
+/// `EFFECT_SPOT`): the nodes keep range spheres, and a leaf light whose sphere meets the cluster
+/// has its cone tested too (`light_types::spot_may_meet`, its record in `lights`).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn walk_subgroup<C: Coop>(
@@ -356,11 +358,14 @@ pub fn walk_subgroup<C: Coop>(
     n: u32,
     b: u32,
     cluster: &ClusterAabb,
+    effects: u32,
+    lights: &[crate::layout::PointLight],
     mut emit: impl FnMut(u32, u32),
 ) -> u32 {
     if n == 0 {
         return 0;
     }
+    let (c0, r0) = crate::light_types::box_sphere(Vec3::from_array(cluster.min), Vec3::from_array(cluster.max));
     let t = Levels::new(n, b);
     let w = c.subgroup_size();
     let lane = c.lane();
@@ -392,7 +397,11 @@ pub fn walk_subgroup<C: Coop>(
                     let chunk = ch + u * w;
                     if chunk < b {
                         let s = child0 + chunk + lane;
-                        let hit = s < last && light_hits(spheres, s, cluster);
+                        // Branch-free: every lane reads a valid slot, the tests are combined
+                        // with `&` (a short-circuit chain here miscompiled on lavapipe).
+                        let sv = if s < last { s } else { last - 1 };
+                        let cone = crate::light_types::spot_may_meet(effects, lights, n, order[sv as usize], c0, r0);
+                        let hit = (s < last) & light_hits(spheres, sv, cluster) & cone;
                         let vote = c.ballot(hit);
                         if hit {
                             emit(found + ballot_rank(vote, lane), order[s as usize]);

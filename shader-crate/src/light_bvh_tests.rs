@@ -126,7 +126,7 @@ fn subgroup_walk_equals_brute_force_at_every_width() {
                 let emu = Emulation { width, workgroup_size: width, shared_words: 0 };
                 let per_lane = run_workgroups(emu, clusters.len() as u32, |g, c, _| {
                     let mut emitted = Vec::new();
-                    let count = walk_subgroup(c, &nodes, &spheres, &order, n as u32, b, &clusters[g as usize], |k, l| emitted.push((k, l)));
+                    let count = walk_subgroup(c, &nodes, &spheres, &order, n as u32, b, &clusters[g as usize], 0, &[], |k, l| emitted.push((k, l)));
                     (count, emitted)
                 });
                 for (g, cluster) in clusters.iter().enumerate() {

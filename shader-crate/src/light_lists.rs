@@ -51,6 +51,28 @@ pub fn lights_meeting(n: u32, lights: &[PointLight], mut emit: impl FnMut(u32, u
     found
 }
 
+/// [`lights_meeting`] in a frame with spot lights: a light passes `test` and its cone may meet
+/// the sphere `(c, r)` bounding the region tested (`light_types::spot_may_meet`).
+#[inline]
+pub fn lights_meeting_spots(effects: u32, n: u32, lights: &[PointLight], mut emit: impl FnMut(u32, u32), test: impl Fn(Vec3, f32) -> bool, c: Vec3, r: f32) -> u32 {
+    let mut found = 0;
+    let mut base = 0;
+    while base < n {
+        unroll8!(u => {
+            let l = base + u;
+            if l < n {
+                let light = lights[l as usize];
+                if test(Vec3::from_array(light.position), light.radius) && crate::light_types::spot_may_meet(effects, lights, n, l, c, r) {
+                    emit(found, l);
+                    found += 1;
+                }
+            }
+        });
+        base += LIGHTS_PER_ITERATION;
+    }
+    found
+}
+
 /// A global counter that hands out slots (`fetch_add` returns the old value).
 pub trait AtomicAdd {
     fn fetch_add(&mut self, v: u32) -> u32;

@@ -276,6 +276,24 @@ pub fn shade_variant<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specu
     }
     let n = normalize_or(n, Vec3::ZERO);
     let l = if dist2 > MIN_LENGTH2 { (c - p) * (1.0 / dist2.sqrt()) } else { n };
+    brdf_radiance::<SPECULAR>(p, n, l, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
+}
+
+/// Radiance from `p` lit from the unit direction `to_light` (view space) with irradiance
+/// `colour · intensity · n·l` and no falloff: a directional light. Same BRDF, clamp and variants
+/// as [`shade_variant`]; `to_light` must be a unit vector (the host normalises it).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn shade_directional<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, to_light: Vec3, colour: Vec3, intensity: f32, effects: u32) -> Vec3 {
+    let n = normalize_or(n, Vec3::ZERO);
+    brdf_radiance::<SPECULAR>(p, n, to_light, albedo, specular, roughness, 1.0, intensity, colour, effects)
+}
+
+/// The BRDF part of [`shade_variant`] and [`shade_directional`]: unit normal `n`, unit direction
+/// to the light `l`, attenuation `att`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn brdf_radiance<const SPECULAR: bool>(p: Vec3, n: Vec3, l: Vec3, albedo: Vec3, specular: f32, roughness: f32, att: f32, intensity: f32, colour: Vec3, effects: u32) -> Vec3 {
     let ndotl = n.dot(l);
     if !(ndotl > 0.0) {
         return Vec3::ZERO;
@@ -294,8 +312,8 @@ pub fn shade_variant<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specu
             }
         }
     }
-    let e = ndotl * att * light.intensity;
-    ((albedo * INV_PI + Vec3::splat(spec)) * Vec3::from_array(light.colour) * e).min(Vec3::splat(MAX_LIGHT_RADIANCE))
+    let e = ndotl * att * intensity;
+    ((albedo * INV_PI + Vec3::splat(spec)) * colour * e).min(Vec3::splat(MAX_LIGHT_RADIANCE))
 }
 
 /// ACES fitted curve (Narkowicz 2015) of one channel, `x` clamped to [0, 8] (NaN → 0), result

@@ -81,9 +81,13 @@ fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
 fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L) -> u32 {
     let mut sum = Vec3::ZERO;
     let count = if f.effects & EFFECT_SPECULAR != 0 {
-        shading::shade_lights::<true, false, _>(surface, f.effects, lights, list, &mut sum)
+        let count = shading::shade_lights::<true, false, _>(surface, f.effects, f.num_lights, lights, list, &mut sum);
+        shading::shade_directional_lights::<true>(surface, f.effects, f.num_lights, lights, &mut sum);
+        count
     } else {
-        shading::shade_lights::<false, false, _>(surface, f.effects, lights, list, &mut sum)
+        let count = shading::shade_lights::<false, false, _>(surface, f.effects, f.num_lights, lights, list, &mut sum);
+        shading::shade_directional_lights::<false>(surface, f.effects, f.num_lights, lights, &mut sum);
+        count
     };
     lighting::encode_srgb8(shading::lit_colour(f, sum, count))
 }

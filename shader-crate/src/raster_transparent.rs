@@ -182,9 +182,13 @@ pub fn fragment_cluster(grid: &crate::cluster_key::ClusterGrid, bounds: &[f32], 
 #[inline]
 fn shade_sum<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L, sum: &mut Vec3) -> u32 {
     if f.effects & EFFECT_SPECULAR != 0 {
-        shading::shade_lights::<true, false, _>(surface, f.effects, lights, list, sum)
+        let count = shading::shade_lights::<true, false, _>(surface, f.effects, f.num_lights, lights, list, sum);
+        shading::shade_directional_lights::<true>(surface, f.effects, f.num_lights, lights, sum);
+        count
     } else {
-        shading::shade_lights::<false, false, _>(surface, f.effects, lights, list, sum)
+        let count = shading::shade_lights::<false, false, _>(surface, f.effects, f.num_lights, lights, list, sum);
+        shading::shade_directional_lights::<false>(surface, f.effects, f.num_lights, lights, sum);
+        count
     }
 }
 

@@ -27,7 +27,8 @@
 //! scene never runs it ("simulate only the effects a scene calls for"). The Forward+ fragment
 //! shader selects the variant with a frame-uniform branch on the specular bit.
 use crate::layout::*;
-use crate::{lighting, octahedral, reconstruct};
+use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SPOT};
+use crate::{lighting, octahedral, reconstruct, spot};
 use spirv_std::glam::{UVec3, Vec3};
 
 /// Colour of pixels that show no geometry.
@@ -256,6 +257,7 @@ impl LightList for LinkedLights<'_> {
 pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     s: &Surface,
     frame_effects: u32,
+    num_lights: u32,
     lights: &[PointLight],
     list: &L,
     sum: &mut Vec3,
@@ -263,7 +265,7 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     let effects = variant_effects::<SPECULAR>(frame_effects);
     if UNROLLED {
         if let Some(end) = list.end() {
-            return shade_range::<SPECULAR, L>(s, effects, lights, list, end, sum);
+            return shade_range::<SPECULAR, L>(s, effects, num_lights, lights, list, end, sum);
         }
     }
     let mut walked = 0;
@@ -273,16 +275,16 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
         if UNROLLED {
             unroll8!(_u => {
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
+                    more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
                     walked += more as u32;
                 }
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
+                    more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
                     walked += more as u32;
                 }
             });
         } else {
-            more = shade_next::<SPECULAR, L>(s, effects, lights, list, &mut pos, sum);
+            more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
             walked += more as u32;
         }
     }
@@ -300,17 +302,17 @@ pub const RANGE_BATCH: u32 = 4;
 /// light after the other. Two batches per loop iteration: `N/8` iterations, under llvmpipe's
 /// loop limiter for `light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE`.
 #[inline]
-fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, end: u32, sum: &mut Vec3) -> u32 {
+fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, end: u32, sum: &mut Vec3) -> u32 {
     let first = list.start();
     if end <= first {
         return 0;
     }
     let mut t = first;
     while t < end {
-        shade_batch::<SPECULAR, L>(s, effects, lights, list, t, end, sum);
+        shade_batch::<SPECULAR, L>(s, effects, num_lights, lights, list, t, end, sum);
         t += RANGE_BATCH;
         if t < end {
-            shade_batch::<SPECULAR, L>(s, effects, lights, list, t, end, sum);
+            shade_batch::<SPECULAR, L>(s, effects, num_lights, lights, list, t, end, sum);
             t += RANGE_BATCH;
         }
     }
@@ -319,37 +321,81 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, li
 
 /// Entries `t..min(t + RANGE_BATCH, end)` of [`shade_range`] (`t < end`).
 #[inline]
-fn shade_batch<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, t: u32, end: u32, sum: &mut Vec3) {
+#[allow(clippy::too_many_arguments)]
+fn shade_batch<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, t: u32, end: u32, sum: &mut Vec3) {
     let last = end - 1;
     let i1 = if t + 1 < end { t + 1 } else { last };
     let i2 = if t + 2 < end { t + 2 } else { last };
     let i3 = if t + 3 < end { t + 3 } else { last };
     let (l0, l1, l2, l3) = (list.at(t), list.at(i1), list.at(i2), list.at(i3));
     let (a, b, c, d) = (lights[l0 as usize], lights[l1 as usize], lights[l2 as usize], lights[l3 as usize]);
-    let shade = |l: &PointLight| lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, l, effects);
-    *sum += shade(&a);
+    *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l0, &a);
     if t + 1 < end {
-        *sum += shade(&b);
+        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l1, &b);
     }
     if t + 2 < end {
-        *sum += shade(&c);
+        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l2, &c);
     }
     if t + 3 < end {
-        *sum += shade(&d);
+        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l3, &d);
+    }
+}
+
+/// The radiance of punctual light `l` (record `light`) at `s`: [`lighting::shade_variant`],
+/// times its cone falloff ([`spot::spot_factor`]) when the frame has spot lights
+/// ([`EFFECT_SPOT`]; a point light's marker record gives exactly 1).
+#[inline]
+fn shade_one<const SPECULAR: bool>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight) -> Vec3 {
+    let radiance = lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
+    if effects & EFFECT_SPOT != 0 {
+        radiance * spot::spot_factor(Vec3::from_array(light.position), &cone_of(lights, num_lights, l), s.pos)
+    } else {
+        radiance
     }
 }
 
 /// One step of [`shade_lights`]: adds the radiance of the light at `pos` and advances `pos`;
 /// false at the end of the list.
 #[inline]
-fn shade_next<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, lights: &[PointLight], list: &L, pos: &mut u32, sum: &mut Vec3) -> bool {
+#[allow(clippy::too_many_arguments)]
+fn shade_next<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, pos: &mut u32, sum: &mut Vec3) -> bool {
     let (l, next) = list.step(*pos);
     if l == NO_LIGHT {
         return false;
     }
     *pos = next;
-    *sum += lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, &lights[l as usize], effects);
+    *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &lights[l as usize]);
     true
+}
+
+/// Adds the frame's directional lights (`light_types` module docs; none without
+/// `EFFECT_DIRECTIONAL`) to `sum`: no list, no culling, once per shaded pixel or fragment, in
+/// every technique after its light list.
+#[inline]
+pub fn shade_directional_lights<const SPECULAR: bool>(s: &Surface, frame_effects: u32, num_lights: u32, lights: &[PointLight], sum: &mut Vec3) {
+    let effects = variant_effects::<SPECULAR>(frame_effects);
+    let count = directional_count(effects);
+    let base = directional_base(effects, num_lights);
+    // Straight-line, no loop: after a Forward+ fragment's list walk a second loop lost lights
+    // on lavapipe (the linked-list variant), and the count is at most 4 anyway.
+    if count > 0 {
+        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[base as usize]);
+    }
+    if count > 1 {
+        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 1) as usize]);
+    }
+    if count > 2 {
+        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 2) as usize]);
+    }
+    if count > 3 {
+        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 3) as usize]);
+    }
+}
+
+/// The radiance of one directional record (`light_types::directional_record`) at `s`.
+#[inline]
+fn shade_directional_record<const SPECULAR: bool>(s: &Surface, effects: u32, d: &PointLight) -> Vec3 {
+    lighting::shade_directional::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, Vec3::from_array(d.position), Vec3::from_array(d.colour), d.intensity, effects)
 }
 
 /// The colour of geometry pixel `i` of a deferred pass: its surface from the G-buffer, the sum
@@ -371,7 +417,8 @@ pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightList>(
 ) -> u32 {
     let surface = fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
     let mut sum = Vec3::ZERO;
-    let count = shade_lights::<SPECULAR, true, L>(&surface, p.effects, lights, list, &mut sum);
+    let count = shade_lights::<SPECULAR, true, L>(&surface, p.effects, p.num_lights, lights, list, &mut sum);
+    shade_directional_lights::<SPECULAR>(&surface, p.effects, p.num_lights, lights, &mut sum);
     output_colour(p, bounds, i, &surface, sum, count)
 }
 

@@ -28,7 +28,7 @@ fn direct(s: &Surface, lights: &[PointLight], effects: u32) -> Vec3 {
 /// The loop over all lights (the deferred list), in a variant.
 fn looped<const SPECULAR: bool>(s: &Surface, lights: &[PointLight], frame_effects: u32) -> Vec3 {
     let mut sum = Vec3::ZERO;
-    let n = shade_lights::<SPECULAR, true, _>(s, frame_effects, lights, &light_range(0, lights.len() as u32), &mut sum);
+    let n = shade_lights::<SPECULAR, true, _>(s, frame_effects, lights.len() as u32, lights, &light_range(0, lights.len() as u32), &mut sum);
     assert_eq!(n, lights.len() as u32);
     sum
 }
@@ -134,13 +134,13 @@ fn cursors_walk_exactly_their_lists() {
         let want = direct(s, &chosen, EFFECT_INVERSE_SQUARE_CUT | EFFECT_SPECULAR);
         // The Forward+ fragment shader walks it one light per iteration; unrolled the same.
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, false, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(shade_lights::<true, false, _>(s, EFFECT_INVERSE_SQUARE_CUT, lights.len() as u32, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
         assert_eq!(sum, want, "linked list of {len}");
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, lights.len() as u32, &lights, &linked_lights(head, &nodes), &mut sum), len, "linked list of {len}");
         assert_eq!(sum, want, "linked list of {len}, unrolled");
         let mut sum = Vec3::ZERO;
-        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, &lights, &index_range(first, len, |t| buffer[t as usize]), &mut sum), len);
+        assert_eq!(shade_lights::<true, true, _>(s, EFFECT_INVERSE_SQUARE_CUT, lights.len() as u32, &lights, &index_range(first, len, |t| buffer[t as usize]), &mut sum), len);
         assert_eq!(sum, want, "range of {len}");
     }
 }
@@ -153,8 +153,8 @@ fn a_list_in_parts_sums_like_one_list() {
     for s in surfaces.iter().step_by(7) {
         let split = rng.below(lights.len() as u32);
         let mut parts = Vec3::ZERO;
-        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &light_range(0, split), &mut parts);
-        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, &lights, &light_range(split, lights.len() as u32 - split), &mut parts);
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, lights.len() as u32, &lights, &light_range(0, split), &mut parts);
+        shade_lights::<true, true, _>(s, EFFECT_SPECULAR, lights.len() as u32, &lights, &light_range(split, lights.len() as u32 - split), &mut parts);
         assert_eq!(parts, looped::<true>(s, &lights, EFFECT_SPECULAR));
     }
 }
@@ -178,4 +178,52 @@ fn fetch_surface_decodes_the_gbuffer() {
         assert_eq!(s.albedo, Vec3::new(0x99 as f32, 0x66 as f32, 0x33 as f32) * (1.0 / 255.0));
         assert_eq!((s.specular, s.roughness), (0.25, 0.5));
     }
+}
+
+/// With `EFFECT_SPOT` each light's radiance is multiplied by its cone falloff (a point light's
+/// marker record by exactly 1), and `shade_directional_lights` adds each directional light once:
+/// the loop equals the direct sum of the model (`spot::spot_factor`, `lighting::shade_directional`).
+#[test]
+fn spots_and_directional_lights_follow_the_model() {
+    use crate::light_types::*;
+    use crate::spot::{spot_factor, Cone};
+    let (all, lights) = surfaces(&mut Rng(23));
+    let n = lights.len() as u32;
+    let mut cut = false;
+    for s in all.iter().step_by(7).take(60) {
+        let cones: Vec<Cone> = (0..lights.len())
+            .map(|i| {
+                let to_surface = (s.pos - Vec3::from_array(lights[i].position)).normalize_or_zero();
+                let axis = (to_surface + Vec3::new(0.3 * (i % 3) as f32, -0.2, 0.1)).normalize();
+                Cone::new(axis, 0.1 + 0.05 * (i % 4) as f32, 0.4 + 0.1 * (i % 5) as f32)
+            })
+            .collect();
+        let mut buffer = lights.clone();
+        buffer.extend(cones.iter().enumerate().map(|(i, c)| if i % 4 == 3 { point_record() } else { spot_record(c) }));
+        let dirs = [(Vec3::new(0.3, 0.9, 0.2).normalize(), [1.0, 0.9, 0.8], 0.7), (Vec3::new(-0.5, 0.2, 0.8).normalize(), [0.2, 0.4, 1.0], 1.5)];
+        buffer.extend(dirs.iter().map(|&(d, c, i)| directional_record(d, c, i)));
+        let effects = EFFECT_SPECULAR | light_effects(true, dirs.len() as u32);
+        let mut expected = Vec3::ZERO;
+        for (i, l) in lights.iter().enumerate() {
+            let f = if i % 4 == 3 { 1.0 } else { spot_factor(Vec3::from_array(l.position), &cones[i], s.pos) };
+            expected += shade(s.pos, s.normal, s.albedo, s.specular, s.roughness, l, effects) * f;
+        }
+        let mut sum = Vec3::ZERO;
+        shade_lights::<true, true, _>(s, effects, n, &buffer, &light_range(0, n), &mut sum);
+        assert_eq!(sum, expected, "cone falloff in the loop");
+        let mut linked = Vec3::ZERO;
+        let nodes: Vec<u32> = (0..n).flat_map(|l| [l, if l + 1 < n { l + 1 } else { NO_NODE }]).collect();
+        shade_lights::<true, false, _>(s, effects, n, &buffer, &linked_lights(0, &nodes), &mut linked);
+        assert_eq!(linked, expected, "cone falloff, one light per iteration");
+        cut |= expected.cmplt(direct(s, &lights, effects)).any();
+        for &(d, c, i) in &dirs {
+            expected += crate::lighting::shade_directional::<true>(s.pos, s.normal, s.albedo, s.specular, s.roughness, d, Vec3::from_array(c), i, effects);
+        }
+        shade_directional_lights::<true>(s, effects, n, &buffer, &mut sum);
+        assert_eq!(sum, expected, "directional lights after the list");
+        let mut none = Vec3::ZERO;
+        shade_directional_lights::<true>(s, EFFECT_SPECULAR, n, &buffer, &mut none);
+        assert_eq!(none, Vec3::ZERO, "no directional loop without the bit");
+    }
+    assert!(cut, "the cones cut some light");
 }

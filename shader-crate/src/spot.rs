@@ -28,8 +28,12 @@
 //! Cost per light–cluster pair: 2 dot products, a square root, 3 comparisons. Memory: none; the
 //! light's direction and cone cosines come with it.
 //!
-//! Status: the model and the tests, CPU-tested; lights are still points in every technique (the
-//! light layout has no type yet), so nothing calls these on the GPU.
+//! Where it runs: every shading pass multiplies a spot's light by [`spot_factor`]
+//! (`shading::shade_lights`); every technique culls spots with [`cone_meets_sphere`] after its
+//! range test (`light_types::spot_may_meet`), against the bounding sphere of what it culls for:
+//! the cluster's box (`clustered-naive`, `clustered-aabb`, and `clustered-bvh` at the BVH's
+//! leaves — its nodes keep range spheres) or the tile's frustum slice (`tiled`, `tiled-2.5d`,
+//! `forward-plus`: `tile_cull::TileFrustum::bounding_sphere`).
 use glam::Vec3;
 #[cfg(target_arch = "spirv")]
 use spirv_std::num_traits::Float;

@@ -104,6 +104,21 @@ pub struct TileFrustum {
     pub d_max: f32,
 }
 
+impl TileFrustum {
+    /// A sphere holding the frustum slice (the sphere of its view-space bounding box): what the
+    /// spot lights' cone test takes for a tile.
+    #[inline]
+    pub fn bounding_sphere(&self) -> (Vec3, f32) {
+        let (n, f) = (self.d_min, self.d_max);
+        // Both slopes at both distances: whatever their signs and order.
+        let x = [self.k_left * n, self.k_left * f, self.k_right * n, self.k_right * f];
+        let y = [self.k_bottom * n, self.k_bottom * f, self.k_top * n, self.k_top * f];
+        let min = Vec3::new(x[0].min(x[1]).min(x[2].min(x[3])), y[0].min(y[1]).min(y[2].min(y[3])), -f);
+        let max = Vec3::new(x[0].max(x[1]).max(x[2].max(x[3])), y[0].max(y[1]).max(y[2].max(y[3])), -n);
+        crate::light_types::box_sphere(min, max)
+    }
+}
+
 /// The frustum of tile `(tx, ty)` between distances `d_min ≤ d_max`: the side slopes are the
 /// pixel-position formula `x = (n_x/H)·tan θ·d` at the tile's edge numerators `2·x0 − W`,
 /// `2·x1 − W`, `H − 2·y1`, `H − 2·y0` (see [`crate::cluster_bounds`]).
@@ -315,12 +330,23 @@ impl TileCull {
     }
 
     /// Step 4 for one invocation: whether the tile keeps lights `first` and `first + 1` (each
-    /// only if below `n`).
+    /// only if below `n`). With spot lights (`effects & EFFECT_SPOT`) a light is kept only if
+    /// its cone may also meet the sphere bounding the tile's frustum slice
+    /// ([`TileFrustum::bounding_sphere`], `light_types::spot_may_meet`).
     #[inline]
-    pub fn keeps_pair(&self, lights: &[PointLight], n: u32, first: u32) -> (bool, bool) {
+    pub fn keeps_pair(&self, lights: &[PointLight], n: u32, first: u32, effects: u32) -> (bool, bool) {
         let a = first < n && self.keeps(&lights[first as usize]);
         let b = first + 1 < n && self.keeps(&lights[first as usize + 1]);
-        (a, b)
+        if effects & crate::light_types::EFFECT_SPOT == 0 || n == 0 {
+            return (a, b);
+        }
+        // Branch-free around the loads (valid indices on every invocation), as in the BVH walk.
+        let (c0, r0) = self.frustum.bounding_sphere();
+        let last = n - 1;
+        let (ia, ib) = (if first < n { first } else { last }, if first + 1 < n { first + 1 } else { last });
+        let ca = crate::light_types::spot_may_meet(effects, lights, n, ia, c0, r0);
+        let cb = crate::light_types::spot_may_meet(effects, lights, n, ib, c0, r0);
+        (a & ca, b & cb)
     }
 }
 
@@ -356,9 +382,9 @@ impl TileCull {
     /// over the workgroup by a prefix sum (the scan's workgroup-memory words). Uniform control
     /// flow; a caller puts a workgroup barrier between two batches (the scan's scratch).
     #[inline]
-    pub fn keep_batch<C: Coop, S: SharedU32 + ?Sized>(&self, c: &C, s: &mut S, lights: &[PointLight], n: u32, next: u32) -> KeptPair {
+    pub fn keep_batch<C: Coop, S: SharedU32 + ?Sized>(&self, c: &C, s: &mut S, lights: &[PointLight], n: u32, next: u32, effects: u32) -> KeptPair {
         let first = next + c.local_index() * LIGHTS_PER_INVOCATION;
-        let (a, b) = self.keeps_pair(lights, n, first);
+        let (a, b) = self.keeps_pair(lights, n, first, effects);
         let (rank, total) = workgroup_exclusive_scan(c, s, a as u32 + b as u32);
         KeptPair { first, a, b, rank, total }
     }

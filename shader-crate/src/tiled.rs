@@ -92,7 +92,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     while next < n {
         let mut count = 0;
         while next < n && count + CULL_BATCH <= LIST_CAPACITY {
-            let kept = cull.keep_batch(c, s, lights, n, next);
+            let kept = cull.keep_batch(c, s, lights, n, next, fp.effects);
             kept.emit(|k, light| s.store(SHARED_LIST + count + k, light));
             count += kept.total;
             next += CULL_BATCH;
@@ -107,7 +107,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
                 let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
                 let list = &*s;
                 let tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
-                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, lights, &tile_list, &mut sums[slot as usize]);
+                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[slot as usize]);
             }
             slot += 1;
         }
@@ -118,7 +118,9 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
         let i = px.pixels[slot as usize];
         if px.geo[slot as usize] != 0 {
             let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
-            out.colours[slot as usize] = shading::output_colour(fp, bounds, i, &surface, sums[slot as usize], out.tile_lights);
+            let mut sum = sums[slot as usize];
+            shading::shade_directional_lights::<SPECULAR>(&surface, fp.effects, fp.num_lights, lights, &mut sum);
+            out.colours[slot as usize] = shading::output_colour(fp, bounds, i, &surface, sum, out.tile_lights);
         }
         slot += 1;
     }

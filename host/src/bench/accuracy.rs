@@ -18,7 +18,10 @@
 //! 4. **culling test** — sphere–AABB, sphere–frustum planes and exact sphere–frustum
 //!    (`shaders::cluster_test`), with `clustered-naive` (the test is all its assignment does):
 //!    lights per cluster (the false positives) against assignment and shading time; reference:
-//!    brute force. All three are conservative, so the image must not change.
+//!    brute force. All three are conservative, so the image must not change. Spot lights: the
+//!    same lights, half of them spots (`lights::spot_cones`), culled by cone and range sphere
+//!    (the default) or by the range sphere alone (`EFFECT_CULL_SPHERE_ONLY`), each against
+//!    brute force with those spots: the image is identical, the lists and times differ.
 //! 5. **order-independent transparency** (scenes with transparent materials only, e.g.
 //!    `glass@stack`) — `--oit` exact / k = 8, 4, 2, 1 / weighted blended, with `clustered-bvh`;
 //!    reference: `clustered-bvh` with exact OIT, which the image tests hold equal to brute force
@@ -184,7 +187,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
 pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
     let mut rows = Vec::new();
-    let bar = indicatif::ProgressBar::new((a.scenes.len() * 16) as u64);
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 19) as u64);
     for name in &a.scenes {
         let scene = super::load_scene(name, a)?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
@@ -235,6 +238,22 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
             for &(effect, label) in culling {
                 let f = run(&base, effect, &settings(a, Technique::ClusteredNaive, a.tile_size, Precision::Oct16))?;
                 measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
+            }
+            if wants(Knob::Culling) {
+                let cones = lights::spot_cones(base.len(), 0.5, a.seed).context("generating spot cones")?;
+                let run_spots = |effects: u32, s: &Settings| -> Result<Frame> {
+                    let mut input = scene_input(&scene, &flat, &base);
+                    input.spots = &cones;
+                    input.effects |= effects;
+                    bar.inc(1);
+                    render::render(gpu, &input, s)
+                };
+                let reference = run_spots(0, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
+                let spot_tests = [(0, "spots: cone + sphere–AABB"), (shaders::light_types::EFFECT_CULL_SPHERE_ONLY, "spots: sphere–AABB only")];
+                for (effect, label) in spot_tests {
+                    let f = run_spots(effect, &settings(a, Technique::ClusteredNaive, a.tile_size, Precision::Oct16))?;
+                    measure("culling test", format!("{label} (clustered-naive)"), &reference, &f, None);
+                }
             }
             let tiles: &[u32] = if wants(Knob::TileSize) { &[16, 32, 64] } else { &[] };
             for &tile in tiles {

@@ -323,7 +323,7 @@ impl ClusterBuffers {
                 None => rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,
                 Some((b, st, w)) => rec.dispatch_indirect(
                     &k.cluster_light_counts_bvh,
-                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes, st],
+                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes, st, lights],
                     &w,
                     args,
                     ARGS_ASSIGNMENT,
@@ -337,7 +337,7 @@ impl ClusterBuffers {
                 None => rec.dispatch_indirect(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
                 Some((b, st, w)) => rec.dispatch_indirect(
                     &k.cluster_light_fill_bvh,
-                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.offsets, &self.list, &b.order, &b.nodes, st, &self.counts],
+                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.offsets, &self.list, &b.order, &b.nodes, st, &self.counts, lights],
                     &w,
                     args,
                     ARGS_ASSIGNMENT,

@@ -38,6 +38,7 @@ pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
+pub mod light_types;
 pub mod nurbs;
 pub mod reference;
 pub mod renderer;
@@ -124,6 +125,10 @@ pub struct SceneInput<'a> {
     pub draws: Vec<Draw>,
     pub materials: Vec<MaterialGpu>,
     pub lights: &'a [PointLight],
+    /// Per light, its cone if it is a spot light; empty when no light is (`light_types`).
+    pub spots: &'a [Option<light_types::Spot>],
+    /// Directional lights (at most `shaders::light_types::MAX_DIRECTIONAL_LIGHTS`).
+    pub directional: &'a [light_types::Directional],
     /// Textures the draws index (`Draw::albedo_texture` / `mask_texture`).
     pub textures: Vec<TextureData<'a>>,
     /// World → view, in f64: the renderer draws camera-relative ([`camera_relative`]).
@@ -183,6 +188,11 @@ pub struct Readback {
     pub offsets: Vec<u32>,
     pub list: Vec<u32>,
     pub lights_view: Vec<PointLight>,
+    /// The light buffer as the kernels read it (`lights_view`, then cone and directional
+    /// records where the scene has them: `shaders::light_types`).
+    pub light_records: Vec<PointLight>,
+    /// The frame's light-type bits (`EFFECT_SPOT`, `EFFECT_CULL_SPHERE_ONLY`) the culling used.
+    pub light_effects: u32,
     pub grid: ClusterGrid,
     pub bounds: Vec<f32>,
     /// Each screen tile's light list as the GPU stored it (`forward-plus`; empty otherwise).

@@ -52,12 +52,21 @@ pub fn cpu_params(rb: &Readback) -> shaders::layout::FrameParams {
         count: 0,
         num_lights: rb.lights_view.len() as u32,
         light_capacity: 0,
-        effects: 0,
+        effects: rb.light_effects,
         normal_precision: 0,
         view: 0,
         exposure: 1.0,
         heat_max: 0,
     }
+}
+
+/// Whether light `l`'s cone reaches `p` (a point light's always does; `spot::spot_factor > 0`).
+fn lit_by_cone(rb: &Readback, l: usize, p: Vec3) -> bool {
+    if rb.light_effects & shaders::light_types::EFFECT_SPOT == 0 {
+        return true;
+    }
+    let cone = shaders::light_types::cone_of(&rb.light_records, rb.lights_view.len() as u32, l as u32);
+    shaders::light_types::is_point(&cone) || shaders::spot::spot_factor(Vec3::from_array(rb.lights_view[l].position), &cone, p) > 0.0
 }
 
 /// All three checks; an error names the first violations.
@@ -90,7 +99,7 @@ pub fn check(rb: &Readback) -> Result<()> {
     let mut sorted_lists = Vec::with_capacity(rb.unique.len());
     for (c, &key) in rb.unique.iter().enumerate() {
         let mut expected = Vec::new();
-        for_each_cluster_light(&params, &rb.bounds, &rb.lights_view, key, |_, l| expected.push(l));
+        for_each_cluster_light(&params, &rb.bounds, &rb.light_records, key, |_, l| expected.push(l));
         let mut got = rb.list[rb.offsets[c] as usize..(rb.offsets[c] + rb.counts[c]) as usize].to_vec();
         got.sort_unstable();
         if got != expected && bad_lists.len() < 5 {
@@ -108,7 +117,7 @@ pub fn check(rb: &Readback) -> Result<()> {
         let (px, py) = (i as u32 % g.width, i as u32 / g.width);
         let p: Vec3 = view_position(g, px, py, distance_from_depth(g.near, depth(i)));
         for (l, light) in rb.lights_view.iter().enumerate() {
-            if light_touches(light, p) && list.binary_search(&(l as u32)).is_err() {
+            if light_touches(light, p) && lit_by_cone(rb, l, p) && list.binary_search(&(l as u32)).is_err() {
                 missing.push((px, py, l));
                 if missing.len() >= 5 {
                     break;

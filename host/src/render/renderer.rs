@@ -9,6 +9,7 @@
 //! ([`Renderer::set_lights`]) or changes the technique or the view ([`Renderer::set_settings`]:
 //! the technique is created anew). A new frame size is a new renderer.
 use super::technique::{ClusterLists, FrameInputs, LightingTechnique, ListStats, MAX_REGROWTHS};
+use super::light_types::{self, light_records};
 use super::{frame_time, gbuffer, lights_to_view, transparent, Frame, Readback, SceneInput, Settings, ViewTransform, HEAT_MAX};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler, Queue};
@@ -43,6 +44,9 @@ struct Resources {
     targets: gbuffer::Targets,
     lights: Buffer,
     lights_view: Vec<PointLight>,
+    /// World-space cones and directional lights: re-transformed with the lights each frame.
+    spots: Vec<Option<light_types::Spot>>,
+    directional: Vec<light_types::Directional>,
     materials_cpu: Vec<MaterialGpu>,
     material_names: Vec<String>,
     materials: Buffer,
@@ -151,7 +155,8 @@ impl Renderer {
         let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
         let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
         let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
-        let lights = Buffer::from_slice(ctx, "lights", &lights_view).context("allocating the light buffer")?;
+        let records = light_records(&scene.view, &lights_view, scene.spots, scene.directional)?;
+        let lights = Buffer::from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
         let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
@@ -161,7 +166,7 @@ impl Renderer {
             count: n,
             num_lights: scene.lights.len() as u32,
             light_capacity: 0,
-            effects: scene.effects,
+            effects: scene.effects | light_types::light_effects(scene.spots, scene.directional)?,
             normal_precision: s.normal_precision.code(),
             view: s.view.code(),
             exposure: s.exposure,
@@ -182,6 +187,8 @@ impl Renderer {
             targets,
             lights,
             lights_view,
+            spots: scene.spots.to_vec(),
+            directional: scene.directional.to_vec(),
             materials_cpu: scene.materials.clone(),
             material_names: scene.material_names.clone(),
             materials,
@@ -276,14 +283,15 @@ impl Renderer {
     /// keeps its lights and technique.
     pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight]) -> Result<()> {
         let lights_view = lights_to_view(&self.res.view, world_lights)?;
+        let records = light_records(&self.res.view, &lights_view, &self.res.spots, &self.res.directional)?;
         if lights_view.len() == self.res.lights_view.len() {
-            self.res.lights.write(&lights_view).context("uploading lights")?;
+            self.res.lights.write(&records).context("uploading lights")?;
             self.res.lights_view = lights_view;
             self.tech.lights_moved(&self.res.inputs());
             return Ok(());
         }
         check_light_count(gpu, lights_view.len())?;
-        let lights = Buffer::from_slice(&gpu.ctx, "lights", &lights_view).context("allocating the light buffer")?;
+        let lights = Buffer::from_slice(&gpu.ctx, "lights", &records).context("allocating the light buffer")?;
         let old_lights = std::mem::replace(&mut self.res.lights, lights);
         let old_view = std::mem::replace(&mut self.res.lights_view, lights_view);
         let old_count = std::mem::replace(&mut self.res.params.num_lights, world_lights.len() as u32);
@@ -386,6 +394,8 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
             offsets: c.offsets,
             list: c.list,
             lights_view: res.lights_view.clone(),
+            light_records: light_records(&res.view, &res.lights_view, &res.spots, &res.directional)?,
+            light_effects: res.params.effects & (shaders::light_types::EFFECT_SPOT | shaders::light_types::EFFECT_CULL_SPHERE_ONLY),
             grid: res.grid,
             bounds: res.bounds.clone(),
             tile_lists: r.tile_lists,

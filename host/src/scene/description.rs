@@ -23,11 +23,18 @@
 //! clusters = 8                    # hotspots only, default 8
 //! offset = 0.1                    # surfaces only: distance off the surface, default 0.5 % of
 //!                                 # the scene diagonal
+//! spot_fraction = 0.3             # optional, in [0, 1]: this share of the lights are spots
+//!                                 # (lights::spot_cones), default 0
 //! [[light]]                       # optional, repeatable: an explicit light (world space)
-//! position = [0, 3, -10]
-//! radius = 8
+//! type = "point"                  # optional: point (default) | spot | directional
+//! position = [0, 3, -10]          # point and spot
+//! radius = 8                      # point and spot: the range
+//! direction = [0, -1, 0]          # spot and directional: where the light points / travels
+//! inner_angle = 20                # spot only: half-angles in degrees, 0 ≤ inner ≤ outer ≤ 90
+//! outer_angle = 35                # (defaults 0 and 45, glTF's)
 //! colour = [1, 0.8, 0.6]          # optional, default white
-//! intensity = 20                  # optional, default: lights.rs rule for the radius
+//! intensity = 20                  # optional, default: lights.rs rule for the radius (1 for
+//!                                 # directional lights)
 //! [[material]]                    # optional, repeatable: override a material of the geometry
 //! name = "fabric_c"               # every material of that name (exact, case-sensitive)
 //! opacity = 0.6                   # optional, in [0, 1] (1 opaque)
@@ -152,12 +159,32 @@ pub struct MaterialDesc {
     pub albedo: Option<[f32; 3]>,
 }
 
-/// One explicit point light (world space). Validated with the scene (`Scene::validate`).
+/// The `type` of a `[[light]]`.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum LightType {
+    #[default]
+    Point,
+    Spot,
+    Directional,
+}
+
+/// One explicit light (world space). Validated here (keys per type) and with the scene.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    pub position: [f32; 3],
-    pub radius: f32,
+    #[serde(rename = "type", default)]
+    pub kind: LightType,
+    /// Point and spot lights.
+    pub position: Option<[f32; 3]>,
+    /// Point and spot lights.
+    pub radius: Option<f32>,
+    /// Spot and directional lights.
+    pub direction: Option<[f32; 3]>,
+    /// Spot lights, degrees (default 0).
+    pub inner_angle: Option<f32>,
+    /// Spot lights, degrees (default 45).
+    pub outer_angle: Option<f32>,
     /// Linear RGB (default white).
     pub colour: Option<[f32; 3]>,
     /// Default: [`default_intensity`]`(radius)`.
@@ -193,6 +220,8 @@ pub struct LightsDesc {
     pub intensity: Option<f32>,
     pub clusters: Option<usize>,
     pub offset: Option<f32>,
+    /// Share of the generated lights that are spots, in [0, 1].
+    pub spot_fraction: Option<f32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -295,6 +324,11 @@ fn check(d: &Description) -> Result<()> {
         if l.clusters.is_some() && l.distribution != Distribution::Hotspots {
             bail!("lights.clusters only applies to distribution = \"hotspots\"");
         }
+        if let Some(f) = l.spot_fraction {
+            if !(0.0..=1.0).contains(&f) {
+                bail!("lights.spot_fraction = {f} must be in [0, 1]");
+            }
+        }
         if l.offset.is_some() && l.distribution != Distribution::Surfaces {
             bail!("lights.offset only applies to distribution = \"surfaces\"");
         }
@@ -325,7 +359,11 @@ fn check(d: &Description) -> Result<()> {
         bail!("{} [[light]] tables are more than the {} lights supported", d.light.len(), lights::MAX_LIGHTS);
     }
     for (i, l) in d.light.iter().enumerate() {
-        finite(&format!("light[{i}].position"), &l.position)?;
+        check_light_keys(i, l)?;
+        if l.kind == LightType::Directional {
+            continue;
+        }
+        let radius = l.radius.unwrap_or(0.0);
         let non_negative = |key: &str, values: &[f32]| -> Result<()> {
             finite(&format!("light[{i}].{key}"), values)?;
             if values.iter().any(|&v| v < 0.0) {
@@ -333,16 +371,77 @@ fn check(d: &Description) -> Result<()> {
             }
             Ok(())
         };
-        non_negative("radius", &[l.radius])?;
+        non_negative("radius", &[radius])?;
         if let Some(c) = l.colour {
             non_negative("colour", &c)?;
         }
         match l.intensity {
             Some(v) => non_negative("intensity", &[v])?,
-            None if !default_intensity(l.radius).is_finite() => {
-                bail!("light[{i}].radius = {}: the default intensity for it overflows 32-bit floats; give light[{i}].intensity", l.radius)
+            None if !default_intensity(radius).is_finite() => {
+                bail!("light[{i}].radius = {radius}: the default intensity for it overflows 32-bit floats; give light[{i}].intensity")
             }
             None => {}
+        }
+    }
+    Ok(())
+}
+
+/// The keys a `[[light]]` of its type needs and allows, and their values (angles in range,
+/// directions finite and non-zero); errors name `light[i].key`.
+fn check_light_keys(i: usize, l: &LightDesc) -> Result<()> {
+    let kind = match l.kind {
+        LightType::Point => "point",
+        LightType::Spot => "spot",
+        LightType::Directional => "directional",
+    };
+    let punctual = l.kind != LightType::Directional;
+    let present = [
+        ("position", l.position.is_some(), punctual, punctual),
+        ("radius", l.radius.is_some(), punctual, punctual),
+        ("direction", l.direction.is_some(), l.kind != LightType::Point, l.kind != LightType::Point),
+        ("inner_angle", l.inner_angle.is_some(), false, l.kind == LightType::Spot),
+        ("outer_angle", l.outer_angle.is_some(), false, l.kind == LightType::Spot),
+    ];
+    for (key, given, required, allowed) in present {
+        if required && !given {
+            bail!("light[{i}].{key} is missing: a {kind} light needs it");
+        }
+        if given && !allowed {
+            bail!("light[{i}].{key} does not apply to a {kind} light (type = {kind:?})");
+        }
+    }
+    if let Some(p) = l.position {
+        finite(&format!("light[{i}].position"), &p)?;
+    }
+    if let Some(d) = l.direction {
+        finite(&format!("light[{i}].direction"), &d)?;
+        if Vec3::from_array(d).length_squared() == 0.0 || !Vec3::from_array(d).normalize_or_zero().is_finite() {
+            bail!("light[{i}].direction = {d:?} has no direction (zero length)");
+        }
+    }
+    if l.kind == LightType::Spot {
+        let (inner, outer) = (l.inner_angle.unwrap_or(0.0), l.outer_angle.unwrap_or(45.0));
+        finite(&format!("light[{i}].outer_angle"), &[outer])?;
+        finite(&format!("light[{i}].inner_angle"), &[inner])?;
+        if !(outer > 0.0 && outer <= 90.0) {
+            bail!("light[{i}].outer_angle = {outer} is out of range: it must be in (0, 90] degrees");
+        }
+        if !(0.0..=outer).contains(&inner) {
+            bail!("light[{i}].inner_angle = {inner} is out of range: it must be in [0, outer_angle = {outer}] degrees");
+        }
+    }
+    if l.kind == LightType::Directional {
+        if let Some(c) = l.colour {
+            finite(&format!("light[{i}].colour"), &c)?;
+            if c.iter().any(|&v| v < 0.0) {
+                bail!("light[{i}].colour must be ≥ 0, got {c:?}");
+            }
+        }
+        if let Some(v) = l.intensity {
+            finite(&format!("light[{i}].intensity"), &[v])?;
+            if v < 0.0 {
+                bail!("light[{i}].intensity must be ≥ 0, got {v}");
+            }
         }
     }
     Ok(())
@@ -455,15 +554,39 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
             light.radius = l.radius.unwrap_or(light.radius);
             light.intensity = l.intensity.unwrap_or(light.intensity);
         }
+        let cones = lights::spot_cones(generated.len(), l.spot_fraction.unwrap_or(0.0), seed).map_err(|e| at(anyhow!("[lights]: {e}")))?;
         // After the geometry's own lights (a glTF file's).
-        scene.lights.extend(generated);
+        let n = generated.len();
+        scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
     }
-    scene.lights.extend(d.light.iter().map(|l| shaders::layout::PointLight {
-        position: l.position,
-        radius: l.radius,
-        colour: l.colour.unwrap_or([1.0; 3]),
-        intensity: l.intensity.unwrap_or_else(|| default_intensity(l.radius)),
-    }));
+    for l in &d.light {
+        let colour = l.colour.unwrap_or([1.0; 3]);
+        let direction = l.direction.map(Vec3::from_array).unwrap_or(Vec3::NEG_Y);
+        if l.kind == LightType::Directional {
+            scene.directional.push(super::Directional { direction, colour, intensity: l.intensity.unwrap_or(1.0) });
+            continue;
+        }
+        let radius = l.radius.unwrap_or(0.0);
+        let light = shaders::layout::PointLight {
+            position: l.position.unwrap_or_default(),
+            radius,
+            colour,
+            intensity: l.intensity.unwrap_or_else(|| default_intensity(radius)),
+        };
+        let spot = (l.kind == LightType::Spot).then(|| super::Spot {
+            direction,
+            inner: l.inner_angle.unwrap_or(0.0).to_radians(),
+            outer: l.outer_angle.unwrap_or(45.0).to_radians(),
+        });
+        scene.add_lights([(light, spot)]);
+    }
+    if scene.directional.len() > shaders::light_types::MAX_DIRECTIONAL_LIGHTS as usize {
+        return Err(at(anyhow!(
+            "{} directional lights: at most {} are supported (every shading pass loops over them)",
+            scene.directional.len(),
+            shaders::light_types::MAX_DIRECTIONAL_LIGHTS
+        )));
+    }
     if let Some(e) = &d.effects {
         scene.effects.specular = e.specular.unwrap_or(scene.effects.specular);
         scene.effects.textures = e.textures.unwrap_or(scene.effects.textures);

@@ -91,6 +91,8 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
         draws: flat.draws.clone(),
         materials: flat.materials.clone(),
         lights,
+        spots: &scene.spots,
+        directional: &scene.directional,
         textures: scene
             .textures
             .iter()

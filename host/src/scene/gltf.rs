@@ -20,12 +20,13 @@
 //! 4. **Lights** (`KHR_lights_punctual`): a point light → a [`PointLight`] at its node's origin,
 //!    colour and intensity as given, radius = `range`; without a range, the distance where
 //!    `intensity · max(colour) / d²` falls to 1/256 (`√(256 · intensity · max(colour))`), past
-//!    which an unwindowed light would change no 8-bit pixel at exposure 1. Spot and directional
-//!    lights are refused with an error naming the light: every light is a point light until the
-//!    renderer has light types (never a silent drop).
+//!    which an unwindowed light would change no 8-bit pixel at exposure 1. A spot light is the
+//!    same point light plus its cone ([`Spot`]): the node's −z axis, `innerConeAngle` and
+//!    `outerConeAngle`; a directional light ([`Directional`]) the node's −z axis, colour and
+//!    intensity. A cone out of glTF's range is an error naming the light.
 //! 5. **Ignored with one warning line each**: skins, morph targets, animations, non-triangle
 //!    primitives, orthographic cameras, extensions the importer does not know.
-use super::{face_averaged_normals, Camera, Material, Mesh, Scene, Texture, TextureKind};
+use super::{face_averaged_normals, Camera, Directional, Material, Mesh, Scene, Spot, Texture, TextureKind};
 use anyhow::{anyhow, bail, Result};
 use glam::{Mat3, Mat4, Vec3};
 use shaders::layout::PointLight;
@@ -45,7 +46,8 @@ pub fn radius_without_range(intensity: f32, colour: [f32; 3]) -> f32 {
 struct Gather<'a> {
     buffers: &'a [gltf::buffer::Data],
     meshes: Vec<Mesh>,
-    lights: Vec<PointLight>,
+    lights: Vec<(PointLight, Option<Spot>)>,
+    directional: Vec<Directional>,
     camera: Option<Camera>,
     warnings: Vec<String>,
     /// Material index per glTF material; the default material is the last.
@@ -75,7 +77,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     let default_material = materials.len() as u32;
     materials.push(Material::diffuse("default", [1.0; 3]));
 
-    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), camera: None, warnings, default_material };
+    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material };
     let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {} has no scene", path.display()))?;
     for node in scene.nodes() {
         visit(&mut g, &node, Mat4::IDENTITY, path)?;
@@ -94,7 +96,8 @@ pub fn load(path: &Path) -> Result<Scene> {
         None => super::obj::default_camera(bounds),
     };
     let mut scene = Scene::new(&name, g.meshes, materials, textures, camera);
-    scene.lights = g.lights;
+    scene.add_lights(g.lights);
+    scene.directional = g.directional;
     scene.warnings = g.warnings;
     Ok(scene)
 }
@@ -164,17 +167,21 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, path: &Path) -
     }
     if let Some(light) = node.light() {
         let what = label("light", light.index(), light.name());
+        let (colour, intensity) = (light.color(), light.intensity());
+        let forward = world.transform_vector3(Vec3::NEG_Z);
+        let point = || PointLight { position: origin.to_array(), radius: light.range().unwrap_or_else(|| radius_without_range(intensity, colour)), colour, intensity };
         match light.kind() {
-            gltf::khr_lights_punctual::Kind::Point => {
-                let (colour, intensity) = (light.color(), light.intensity());
-                let radius = light.range().unwrap_or_else(|| radius_without_range(intensity, colour));
-                g.lights.push(PointLight { position: origin.to_array(), radius, colour, intensity });
+            gltf::khr_lights_punctual::Kind::Point => g.lights.push((point(), None)),
+            gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                let spot = Spot { direction: forward, inner: inner_cone_angle, outer: outer_cone_angle };
+                crate::render::light_types::check_spot(&format!("glTF file {}: {what}", path.display()), &spot)?;
+                g.lights.push((point(), Some(spot)));
             }
-            kind => bail!(
-                "glTF file {}: {what} is a {} light: only point lights are supported so far",
-                path.display(),
-                if matches!(kind, gltf::khr_lights_punctual::Kind::Directional) { "directional" } else { "spot" }
-            ),
+            gltf::khr_lights_punctual::Kind::Directional => {
+                let d = Directional { direction: forward, colour, intensity };
+                crate::render::light_types::check_directional(&format!("glTF file {}: {what}", path.display()), &d)?;
+                g.directional.push(d);
+            }
         }
     }
     for child in node.children() {

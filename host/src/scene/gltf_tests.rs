@@ -157,12 +157,19 @@ fn gltf_refusals_name_the_file_and_what() {
     let dir = TempDir::new("gltf-bad");
     write_leaf(&dir);
     std::fs::write(dir.0.join("tri.bin"), triangle_bin()).unwrap();
-    // A spot light is used by no node here, but a node that uses one is refused, naming it.
-    let spot = r#"{"type": "spot", "name": "torch", "spot": {"outerConeAngle": 0.5}}"#;
+    // A spot light is used by no node here; a node that uses one loads it as a spot (the
+    // node's −z axis, its cone angles), and a cone past 90° is refused, naming the light.
+    let spot = r#"{"type": "spot", "name": "torch", "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.5}}"#;
     let text = document(Some("tri.bin"), spot).replace(r#""light": 1}}"#, r#""light": 2}}"#);
-    let p = dir.write("spot.gltf", &text);
-    let e = load_err(&p);
-    assert!(e.contains("spot.gltf") && e.contains("light 2 (\"torch\") is a spot light"), "{e}");
+    let s = load(&dir.write("spot.gltf", &text));
+    let cone = s.spots.iter().flatten().next().unwrap_or_else(|| panic!("no spot in {:?}", s.spots));
+    assert_eq!((cone.inner, cone.outer, s.spots.len(), s.lights.len()), (0.25, 0.5, s.lights.len(), 2));
+    let wide = text.replace(r#""outerConeAngle": 0.5"#, r#""outerConeAngle": 2.0"#);
+    let e = load_err(&dir.write("wide.gltf", &wide));
+    assert!(e.contains("wide.gltf") && e.contains("light 2 (\"torch\"): outer_angle") && !e.contains('\n'), "{e}");
+    let sun = r#"{"type": "directional", "name": "sun", "intensity": 3}"#;
+    let s = load(&dir.write("sun.gltf", &document(Some("tri.bin"), sun).replace(r#""light": 1}}"#, r#""light": 2}}"#)));
+    assert_eq!((s.directional.len(), s.directional[0].intensity), (1, 3.0));
     let p = dir.write("broken.gltf", "{\"asset\": ");
     let e = load_err(&p);
     assert!(e.contains("glTF file") && e.contains("broken.gltf"), "{e}");

@@ -8,7 +8,7 @@
 //! lights means smaller lights, and the work per pixel stays comparable across light counts.
 //! Intensity is [`DEFAULT_INTENSITY`] × [`radius_scaled_intensity`] (equal brightness at half
 //! range whatever the radius); colours are random saturated hues.
-use super::Scene;
+use super::{Scene, Spot};
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
 use shaders::layout::PointLight;
@@ -212,6 +212,31 @@ pub fn on_surfaces(scene: &Scene, n: usize, seed: u64, offset: f32) -> Result<Ve
             let normal = (b - a).cross(c - a).normalize_or_zero();
             let radius = rng.range(0.25 * r0, 0.75 * r0);
             PointLight { position: (p + normal * offset).to_array(), radius, colour: saturated_colour(&mut rng), intensity: DEFAULT_INTENSITY * radius_scaled_intensity(radius) }
+        })
+        .collect())
+}
+
+/// Half-angles of generated spot lights: outer uniform in this range (degrees), inner a uniform
+/// fraction [`SPOT_INNER_FRACTION`] of it.
+pub const SPOT_OUTER_DEGREES: (f32, f32) = (20.0, 60.0);
+pub const SPOT_INNER_FRACTION: (f32, f32) = (0.3, 0.9);
+
+/// Cones for `n` generated lights: each light is a spot with probability `fraction` (seeded, its
+/// own stream: the lights themselves do not change with the fraction), pointing mostly down
+/// (`−y` plus a random tilt up to ≈ 45°), half-angles [`SPOT_OUTER_DEGREES`]. Empty for
+/// `fraction = 0` (a scene without spots).
+pub fn spot_cones(n: usize, fraction: f32, seed: u64) -> Result<Vec<Option<Spot>>> {
+    ensure!(fraction.is_finite() && (0.0..=1.0).contains(&fraction), "spot fraction {fraction} must be in [0, 1]");
+    if fraction == 0.0 {
+        return Ok(vec![]);
+    }
+    let mut rng = Pcg32::new(seed ^ 0x5907_5907_a11c_e5e5);
+    Ok((0..n)
+        .map(|_| {
+            let tilt = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
+            let outer = rng.range(SPOT_OUTER_DEGREES.0, SPOT_OUTER_DEGREES.1).to_radians();
+            let inner = outer * rng.range(SPOT_INNER_FRACTION.0, SPOT_INNER_FRACTION.1);
+            (rng.f32() < fraction).then(|| Spot { direction: (Vec3::NEG_Y + tilt).normalize(), inner, outer })
         })
         .collect())
 }

@@ -26,6 +26,7 @@ use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
 use shaders::layout::{PointLight, EFFECT_ALPHA_TEST, EFFECT_SPECULAR, EFFECT_TEXTURES};
 use std::path::{Path, PathBuf};
+pub use crate::render::light_types::{Directional, Spot};
 
 pub mod bookmark;
 pub mod description;
@@ -238,6 +239,10 @@ pub struct Scene {
     pub camera: Camera,
     /// World-space point lights; empty unless a description asked for some.
     pub lights: Vec<PointLight>,
+    /// Per light of `lights`, its cone if it is a spot light; empty when none is.
+    pub spots: Vec<Option<Spot>>,
+    /// Directional lights (world space).
+    pub directional: Vec<Directional>,
     pub effects: Effects,
     /// Axis-aligned bounds of all vertex positions and NURBS control points, (min, max).
     pub bounds: (Vec3, Vec3),
@@ -308,7 +313,7 @@ impl Scene {
     pub fn new(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, textures: Vec<Texture>, camera: Camera) -> Self {
         let bounds = bounds_of(&meshes);
         let effects = Effects::from_materials(&materials);
-        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], effects, bounds, warnings: vec![] }
+        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], spots: vec![], directional: vec![], effects, bounds, warnings: vec![] }
     }
 
     /// Adds NURBS patches and grows the bounds by their control points.
@@ -322,6 +327,21 @@ impl Scene {
     pub fn set_tess_level(&mut self, level: u32) {
         for p in &mut self.nurbs {
             p.level = Some(level);
+        }
+    }
+
+    /// Appends lights, each with its cone (`None`: a point light): `spots` stays empty while no
+    /// light is a spot, and parallel to `lights` once one is.
+    pub fn add_lights(&mut self, lights: impl IntoIterator<Item = (PointLight, Option<Spot>)>) {
+        for (l, s) in lights {
+            if s.is_some() && self.spots.is_empty() {
+                self.spots.resize(self.lights.len(), None);
+            }
+            let parallel = !self.spots.is_empty() || s.is_some();
+            self.lights.push(l);
+            if parallel {
+                self.spots.push(s);
+            }
         }
     }
 
@@ -393,6 +413,18 @@ impl Scene {
         for (i, l) in self.lights.iter().enumerate() {
             crate::render::light_contract::check(i, l)?;
         }
+        if !self.spots.is_empty() && self.spots.len() != self.lights.len() {
+            bail!("scene has {} spot records for {} lights", self.spots.len(), self.lights.len());
+        }
+        for (i, s) in self.spots.iter().enumerate() {
+            if let Some(s) = s {
+                crate::render::light_types::check_spot(&format!("light {i} (spot)"), s)?;
+            }
+        }
+        for (i, d) in self.directional.iter().enumerate() {
+            crate::render::light_types::check_directional(&format!("directional light {i}"), d)?;
+        }
+        crate::render::light_types::light_effects(&self.spots, &self.directional)?;
         if lights::MAX_LIGHTS < self.lights.len() {
             bail!("scene has {} lights, more than the {} supported", self.lights.len(), lights::MAX_LIGHTS);
         }

@@ -365,3 +365,50 @@ fn named_views_set_the_camera_and_unknown_ones_are_named_errors() {
     let e = format!("{:#}", Scene::load("no@such.obj", Path::new(".")).unwrap_err());
     assert!(!e.contains("unknown view"), "{e}");
 }
+
+/// `[[light]] type = …`: point, spot and directional lights with their keys; `[lights]
+/// spot_fraction`; the keys a type needs or does not take, and angles out of range, are one-line
+/// errors naming `light[i].key`.
+#[test]
+fn descriptions_with_light_types() {
+    let dir = TempDir::new("desc-types");
+    let p = dir.write(
+        "t.toml",
+        "geometry = \"city\"\n[lights]\ncount = 200\ndistribution = \"uniform\"\nspot_fraction = 0.5\n\
+         [[light]]\nposition = [0, 3, 0]\nradius = 5\n\
+         [[light]]\ntype = \"spot\"\nposition = [0, 3, 0]\nradius = 8\ndirection = [0, -1, 0]\ninner_angle = 20\nouter_angle = 35\n\
+         [[light]]\ntype = \"directional\"\ndirection = [1, -1, 0]\nintensity = 2\n",
+    );
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+    assert_eq!((s.lights.len(), s.spots.len(), s.directional.len()), (202, 202, 1));
+    let generated = s.spots[..200].iter().flatten().count();
+    assert!((60..140).contains(&generated), "about half of the generated lights are spots: {generated}");
+    assert_eq!(s.spots[200], None);
+    let spot = s.spots[201].unwrap();
+    assert_eq!((spot.direction, spot.inner, spot.outer), (Vec3::NEG_Y, 20f32.to_radians(), 35f32.to_radians()));
+    assert_eq!((s.directional[0].direction, s.directional[0].intensity, s.directional[0].colour), (Vec3::new(1.0, -1.0, 0.0), 2.0, [1.0; 3]));
+    // Without spots, no cone section at all.
+    let p = dir.write("points.toml", "geometry = \"city\"\n[[light]]\nposition = [0, 3, 0]\nradius = 5\n");
+    assert!(Scene::load(p.to_str().unwrap(), &assets()).unwrap().spots.is_empty());
+
+    let light = |body: &str| description_err(&format!("geometry = \"city\"\n[[light]]\nposition = [0, 1, 0]\nradius = 1\n[[light]]\n{body}\n"));
+    let spot = "type = \"spot\"\nposition = [0, 1, 0]\nradius = 4\ndirection = [0, -1, 0]";
+    for (body, wanted) in [
+        (format!("{spot}\nouter_angle = 95"), "light[1].outer_angle = 95 is out of range"),
+        (format!("{spot}\nouter_angle = 30\ninner_angle = 40"), "light[1].inner_angle = 40 is out of range"),
+        (format!("{spot}\nouter_angle = nan"), "light[1].outer_angle must be finite"),
+        ("type = \"spot\"\nposition = [0, 1, 0]\nradius = 4\ndirection = [0, 0, 0]".into(), "light[1].direction = [0.0, 0.0, 0.0] has no direction"),
+        ("type = \"spot\"\nposition = [0, 1, 0]\nradius = 4".into(), "light[1].direction is missing"),
+        ("type = \"directional\"\ndirection = [0, -1, 0]\nradius = 3".into(), "light[1].radius does not apply to a directional light"),
+        ("position = [0, 1, 0]\nradius = 1\nouter_angle = 10".into(), "light[1].outer_angle does not apply to a point light"),
+        ("type = \"directional\"\ndirection = [0, inf, 0]".into(), "light[1].direction must be finite"),
+        ("type = \"area\"\nposition = [0, 1, 0]\nradius = 1".into(), "unknown variant `area`"),
+    ] {
+        let e = light(&body);
+        assert!(e.contains(wanted) && !e.contains('\n'), "{body}: {e}");
+    }
+    let e = description_err(&format!("geometry = \"city\"\n{}", "[[light]]\ntype = \"directional\"\ndirection = [0, -1, 0]\n".repeat(5)));
+    assert!(e.contains("5 directional lights: at most 4"), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"uniform\"\nspot_fraction = 1.5\n");
+    assert!(e.contains("lights.spot_fraction = 1.5 must be in [0, 1]"), "{e}");
+}

@@ -1,0 +1,183 @@
+//! Light types: point, spot and directional lights as the shading and culling kernels see them.
+//!
+//! # Layout: one light buffer, sections only where the scene calls for them
+//!
+//! Every punctual light (point or spot) is a [`PointLight`] (32 B: apex, range, colour,
+//! intensity): the record every culling test and every light list knows. The light buffer holds
+//! up to three sections, each 32-byte records read through the same `&[PointLight]` binding:
+//!
+//! ```text
+//!  records 0 .. n          PointLight of every punctual light            (always)
+//!  records n .. 2n         cone of light l at n + l (spot_record)        (EFFECT_SPOT only)
+//!  records b .. b + k      directional lights (directional_record),      (EFFECT_DIRECTIONAL only)
+//!                          b = n, or 2n with spots; k ≤ MAX_DIRECTIONAL_LIGHTS
+//! ```
+//!
+//! Why one buffer and not a new binding: every kernel that shades or culls already binds the
+//! light buffer, so the cone and directional records reach each of them (deferred, clustered,
+//! tiled, Forward+, the transparent pass) without a descriptor change, and a scene without spot
+//! or directional lights uploads, binds and reads nothing more than before. The section a kernel
+//! reads is gated by a frame-uniform `EFFECT_*` bit, so a scene without spots runs no cone code
+//! and a scene without directional lights no directional loop; `FrameParams` is unchanged (the
+//! directional count rides in the effect word's bits [`DIRECTIONAL_COUNT_SHIFT`]`..`).
+//!
+//! A cone record ([`spot_record`]) is the view-space unit axis (where the light points), then
+//! `cos θ_inner`, `cos θ_outer`, `sin θ_outer` in the record's `radius`, `colour[0]`, `colour[1]`.
+//! In a scene that mixes points and spots a point light's cone record is the marker
+//! [`point_record`] (`cos θ_outer = cos θ_inner = −2`): [`crate::spot::cone_falloff`] gives
+//! exactly 1 for it (the shading multiplies by 1, bit-exact), and the culling tests skip lights
+//! whose `cos θ_outer < −½` ([`is_point`]).
+//!
+//! A directional record ([`directional_record`]) is the view-space unit direction *towards* the
+//! light, its intensity, its colour: irradiance `colour · intensity · n·l` everywhere, no range,
+//! so no culling: every shading pass adds them once per pixel ([`crate::shading::shade_directional_lights`]).
+use crate::layout::PointLight;
+use crate::spot::{cone_meets_sphere, Cone};
+use glam::Vec3;
+
+/// The scene has spot lights: the light buffer holds the cone section; shading multiplies by the
+/// cone falloff and the culling kernels test cones.
+pub const EFFECT_SPOT: u32 = 64;
+/// The scene has directional lights: the count is in the effect word's bits
+/// [`DIRECTIONAL_COUNT_SHIFT`]`..` (at most [`MAX_DIRECTIONAL_LIGHTS`]).
+pub const EFFECT_DIRECTIONAL: u32 = 128;
+/// Accuracy study: spot lights are culled by their range sphere only (no cone test): the image
+/// is the same, the lists longer.
+pub const EFFECT_CULL_SPHERE_ONLY: u32 = 2048;
+/// First bit of the directional-light count in the effect word (3 bits).
+pub const DIRECTIONAL_COUNT_SHIFT: u32 = 8;
+/// Most directional lights a scene may have (a small fixed loop in every shading pass).
+pub const MAX_DIRECTIONAL_LIGHTS: u32 = 4;
+// `shading::shade_directional_lights` is straight-line code for exactly this many.
+const _: () = assert!(MAX_DIRECTIONAL_LIGHTS == 4);
+/// `cos θ_outer` (and `cos θ_inner`) of a point light's cone record in a scene with spots.
+pub const POINT_MARKER: f32 = -2.0;
+
+/// The effect bits of a scene's light types: [`EFFECT_SPOT`] with spots, [`EFFECT_DIRECTIONAL`]
+/// and the count with `directional` (≤ [`MAX_DIRECTIONAL_LIGHTS`]) directional lights.
+#[inline]
+pub const fn light_effects(spots: bool, directional: u32) -> u32 {
+    let s = if spots { EFFECT_SPOT } else { 0 };
+    let d = if directional > 0 { EFFECT_DIRECTIONAL | (directional << DIRECTIONAL_COUNT_SHIFT) } else { 0 };
+    s | d
+}
+
+/// Directional lights of a frame (0 without [`EFFECT_DIRECTIONAL`]).
+#[inline]
+pub fn directional_count(effects: u32) -> u32 {
+    if effects & EFFECT_DIRECTIONAL != 0 {
+        let k = (effects >> DIRECTIONAL_COUNT_SHIFT) & 7;
+        if k < MAX_DIRECTIONAL_LIGHTS {
+            k
+        } else {
+            MAX_DIRECTIONAL_LIGHTS
+        }
+    } else {
+        0
+    }
+}
+
+/// Record index of the first directional light: after the punctual lights and their cones.
+#[inline]
+pub fn directional_base(effects: u32, num_lights: u32) -> u32 {
+    if effects & EFFECT_SPOT != 0 {
+        2 * num_lights
+    } else {
+        num_lights
+    }
+}
+
+/// The cone of punctual light `l` (only with [`EFFECT_SPOT`]): record `num_lights + l`.
+#[inline]
+pub fn cone_of(lights: &[PointLight], num_lights: u32, l: u32) -> Cone {
+    let r = lights[(num_lights + l) as usize];
+    Cone { direction: Vec3::from_array(r.position), cos_inner: r.radius, cos_outer: r.colour[0], sin_outer: r.colour[1] }
+}
+
+/// Whether a cone record is the point-light marker ([`point_record`]).
+#[inline]
+pub fn is_point(cone: &Cone) -> bool {
+    cone.cos_outer < -0.5
+}
+
+/// Whether punctual light `light` (index `l`) may light a point of the sphere `(c, r)` by its
+/// cone: with [`EFFECT_SPOT`] the cone test ([`cone_meets_sphere`]; point lights pass), else
+/// `true`. The caller has tested the range sphere.
+#[inline]
+pub fn cone_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u32, light: &PointLight, c: Vec3, r: f32) -> bool {
+    if effects & EFFECT_SPOT == 0 {
+        return true;
+    }
+    let cone = cone_of(lights, num_lights, l);
+    is_point(&cone) || cone_meets_sphere(Vec3::from_array(light.position), &cone, light.radius, c, r)
+}
+
+/// [`cone_may_meet`] for light index `l`, its record read only with [`EFFECT_SPOT`] and
+/// without [`EFFECT_CULL_SPHERE_ONLY`] (the accuracy study's "sphere" culling of spots).
+#[inline]
+pub fn spot_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u32, c: Vec3, r: f32) -> bool {
+    if effects & EFFECT_SPOT == 0 || effects & EFFECT_CULL_SPHERE_ONLY != 0 {
+        return true;
+    }
+    let light = lights[l as usize];
+    cone_may_meet(effects, lights, num_lights, l, &light, c, r)
+}
+
+/// The bounding sphere `(centre, radius)` of a box: what the cone tests take for a cluster.
+#[inline]
+pub fn box_sphere(min: Vec3, max: Vec3) -> (Vec3, f32) {
+    ((min + max) * 0.5, (max - min).length() * 0.5)
+}
+
+/// The cone record of a spot light (module docs).
+#[inline]
+pub fn spot_record(cone: &Cone) -> PointLight {
+    PointLight { position: cone.direction.to_array(), radius: cone.cos_inner, colour: [cone.cos_outer, cone.sin_outer, 0.0], intensity: 0.0 }
+}
+
+/// The cone record of a point light in a scene with spots: falloff 1, never culled by a cone.
+#[inline]
+pub fn point_record() -> PointLight {
+    PointLight { position: [0.0, 0.0, -1.0], radius: POINT_MARKER, colour: [POINT_MARKER, 0.0, 0.0], intensity: 0.0 }
+}
+
+/// The record of a directional light: unit direction towards the light (view space), colour,
+/// intensity.
+#[inline]
+pub fn directional_record(to_light: Vec3, colour: [f32; 3], intensity: f32) -> PointLight {
+    PointLight { position: to_light.to_array(), radius: 0.0, colour, intensity }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spot::{cone_falloff, spot_factor};
+
+    #[test]
+    fn records_round_trip_and_the_point_marker_is_neutral() {
+        let cone = Cone::new(Vec3::new(0.0, -1.0, 0.0), 0.2, 0.5);
+        let lights = [PointLight { position: [1.0; 3], radius: 4.0, colour: [1.0; 3], intensity: 1.0 }; 2];
+        let buf = [lights[0], lights[1], spot_record(&cone), point_record()];
+        assert_eq!(cone_of(&buf, 2, 0), cone);
+        let marker = cone_of(&buf, 2, 1);
+        assert!(is_point(&marker) && !is_point(&cone));
+        for c in [1.0, 0.3, 0.0, -0.7, -1.0] {
+            assert_eq!(cone_falloff(c, &marker), 1.0, "cos θ = {c}");
+        }
+        assert_eq!(spot_factor(Vec3::ZERO, &marker, Vec3::new(0.0, 0.0, 5.0)), 1.0);
+        let far = Vec3::new(0.0, 50.0, 0.0);
+        assert!(cone_may_meet(0, &buf, 2, 0, &buf[0], far, 0.1), "without EFFECT_SPOT nothing is culled by a cone");
+        assert!(!cone_may_meet(EFFECT_SPOT, &buf, 2, 0, &buf[0], far, 0.1), "behind the spot");
+        assert!(cone_may_meet(EFFECT_SPOT, &buf, 2, 1, &buf[1], far, 0.1), "a point light in a scene with spots");
+    }
+
+    #[test]
+    fn effect_bits_carry_the_directional_count() {
+        assert_eq!(light_effects(false, 0), 0);
+        assert_eq!(directional_count(light_effects(true, 3)), 3);
+        assert_eq!(directional_count(light_effects(false, 0) | 1), 0);
+        assert_eq!(directional_base(light_effects(true, 1), 10), 20);
+        assert_eq!(directional_base(light_effects(false, 1), 10), 10);
+        assert_eq!(light_effects(true, 0) & (crate::layout::EFFECT_SPECULAR | crate::layout::EFFECT_CULL_EXACT), 0, "no clash with the other bits");
+    }
+}
