@@ -1,9 +1,18 @@
 //! The GPU as the algorithms see it: a Vulkan context plus one typed pipeline per kernel of the
 //! compute module and per raster pass of the raster module that `build.rs` compiled from
-//! `shader-crate` (both embedded in the binary), all built once when the device opens.
-use crate::vk::{ComputePipeline, Context, ContextOptions, DepthTest, GraphicsPipeline, Profiler, Recorder, ShaderModule, TargetFormat, VkResult};
+//! `shader-crate` (both embedded in the binary, each module created once and shared), built when
+//! the device opens. The entries that shade or cull punctual lights are [`LightCompute`] /
+//! [`LightRaster`]: a pipeline per light-type mix, created when a frame first needs it
+//! (`vk::light_typed`).
+use crate::vk::{Blend, ComputePipeline, Context, ContextOptions, DepthTest, GraphicsPipeline, LightTyped, Profiler, Recorder, ShaderModule, TargetFormat, VkResult};
 use shaders::kernels::{self, RasterKernel};
 use shaders::layout::*;
+use std::sync::Arc;
+
+/// A compute kernel specialised by the frame's light types ([`LightTyped::get`]).
+pub type LightCompute<P> = LightTyped<ComputePipeline<P>>;
+/// A raster pass specialised by the frame's light types ([`LightTyped::get`]).
+pub type LightRaster<P> = LightTyped<GraphicsPipeline<P>>;
 
 /// The compute SPIR-V module (rust-gpu output), embedded at build time.
 pub const COMPUTE_SPV: &[u8] = include_bytes!(env!("MANYLIGHTS_COMPUTE_SPV"));
@@ -19,11 +28,11 @@ pub struct Kernels {
     pub record_pages: ComputePipeline<FrameParams>,
     pub store_slots: ComputePipeline<FrameParams>,
     pub compact_clusters: ComputePipeline<FrameParams>,
-    pub cluster_light_counts: ComputePipeline<FrameParams>,
-    pub cluster_light_fill: ComputePipeline<FrameParams>,
+    pub cluster_light_counts: LightCompute<FrameParams>,
+    pub cluster_light_fill: LightCompute<FrameParams>,
     /// Shading variants `[diffuse only, with specular]`: a scene runs only the one it needs.
-    pub shade_clustered: [ComputePipeline<FrameParams>; 2],
-    pub shade_deferred: [ComputePipeline<FrameParams>; 2],
+    pub shade_clustered: [LightCompute<FrameParams>; 2],
+    pub shade_deferred: [LightCompute<FrameParams>; 2],
     pub scan_add_offsets: ComputePipeline<ScanFixParams>,
     pub scan_store_total: ComputePipeline<ScanFixParams>,
     pub indirect_args: ComputePipeline<IndirectParams>,
@@ -41,77 +50,79 @@ pub struct Kernels {
     pub bvh_spheres: ComputePipeline<BvhParams>,
     pub bvh_leaves: ComputePipeline<BvhParams>,
     pub bvh_level: ComputePipeline<BvhParams>,
-    pub cluster_light_counts_bvh: ComputePipeline<BvhAssignParams>,
-    pub cluster_light_fill_bvh: ComputePipeline<BvhAssignParams>,
+    pub cluster_light_counts_bvh: LightCompute<BvhAssignParams>,
+    pub cluster_light_fill_bvh: LightCompute<BvhAssignParams>,
     /// Tiled culling + shading `[diffuse only, with specular]`.
-    pub shade_tiled: [ComputePipeline<TiledParams>; 2],
+    pub shade_tiled: [LightCompute<TiledParams>; 2],
     pub aabb_bounds: ComputePipeline<FrameParams>,
     pub aabb_mark: ComputePipeline<FrameParams>,
     pub aabb_compact: ComputePipeline<FrameParams>,
-    pub aabb_assign: ComputePipeline<FrameParams>,
-    pub shade_aabb: [ComputePipeline<FrameParams>; 2],
+    pub aabb_assign: LightCompute<FrameParams>,
+    pub shade_aabb: [LightCompute<FrameParams>; 2],
     /// Forward+ culling into per-tile lists `[linked, array]` (`render::forward_plus::TileLists`).
-    pub forward_plus_cull: [ComputePipeline<TiledParams>; 2],
+    pub forward_plus_cull: [LightCompute<TiledParams>; 2],
+    /// [`Kernels::forward_plus_cull`] over tile bounds widened to the transparent fragments.
+    pub forward_plus_cull_widened: [LightCompute<TiledParams>; 2],
 }
 
 impl Kernels {
-    pub fn new(ctx: &Context) -> VkResult<Self> {
-        let module = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
+    pub fn new(ctx: &Context, module: &Arc<ShaderModule>) -> VkResult<Self> {
         Ok(Self {
-            octa_roundtrip: ComputePipeline::new(ctx, &module, kernels::OCTA_ROUNDTRIP)?,
-            cluster_keys: ComputePipeline::new(ctx, &module, kernels::CLUSTER_KEYS)?,
-            morton_codes: ComputePipeline::new(ctx, &module, kernels::MORTON_CODES)?,
-            workgroup_scan: ComputePipeline::new(ctx, &module, kernels::WORKGROUP_SCAN)?,
-            debug_view: ComputePipeline::new(ctx, &module, kernels::DEBUG_VIEW)?,
-            pixel_keys: ComputePipeline::new(ctx, &module, kernels::PIXEL_KEYS)?,
-            record_pages: ComputePipeline::new(ctx, &module, kernels::RECORD_PAGES)?,
-            store_slots: ComputePipeline::new(ctx, &module, kernels::STORE_SLOTS)?,
-            compact_clusters: ComputePipeline::new(ctx, &module, kernels::COMPACT_CLUSTERS)?,
-            cluster_light_counts: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS)?,
-            cluster_light_fill: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL)?,
+            octa_roundtrip: ComputePipeline::new(ctx, module, kernels::OCTA_ROUNDTRIP)?,
+            cluster_keys: ComputePipeline::new(ctx, module, kernels::CLUSTER_KEYS)?,
+            morton_codes: ComputePipeline::new(ctx, module, kernels::MORTON_CODES)?,
+            workgroup_scan: ComputePipeline::new(ctx, module, kernels::WORKGROUP_SCAN)?,
+            debug_view: ComputePipeline::new(ctx, module, kernels::DEBUG_VIEW)?,
+            pixel_keys: ComputePipeline::new(ctx, module, kernels::PIXEL_KEYS)?,
+            record_pages: ComputePipeline::new(ctx, module, kernels::RECORD_PAGES)?,
+            store_slots: ComputePipeline::new(ctx, module, kernels::STORE_SLOTS)?,
+            compact_clusters: ComputePipeline::new(ctx, module, kernels::COMPACT_CLUSTERS)?,
+            cluster_light_counts: LightTyped::compute(module, kernels::CLUSTER_LIGHT_COUNTS),
+            cluster_light_fill: LightTyped::compute(module, kernels::CLUSTER_LIGHT_FILL),
             shade_clustered: [
-                ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED_DIFFUSE)?,
-                ComputePipeline::new(ctx, &module, kernels::SHADE_CLUSTERED_SPECULAR)?,
+                LightTyped::compute(module, kernels::SHADE_CLUSTERED_DIFFUSE),
+                LightTyped::compute(module, kernels::SHADE_CLUSTERED_SPECULAR),
             ],
             shade_deferred: [
-                ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED_DIFFUSE)?,
-                ComputePipeline::new(ctx, &module, kernels::SHADE_DEFERRED_SPECULAR)?,
+                LightTyped::compute(module, kernels::SHADE_DEFERRED_DIFFUSE),
+                LightTyped::compute(module, kernels::SHADE_DEFERRED_SPECULAR),
             ],
-            scan_add_offsets: ComputePipeline::new(ctx, &module, kernels::SCAN_ADD_OFFSETS)?,
-            scan_store_total: ComputePipeline::new(ctx, &module, kernels::SCAN_STORE_TOTAL)?,
-            indirect_args: ComputePipeline::new(ctx, &module, kernels::INDIRECT_ARGS)?,
-            scan_counted_total: ComputePipeline::new(ctx, &module, kernels::SCAN_COUNTED_TOTAL)?,
-            radix_histogram: ComputePipeline::new(ctx, &module, kernels::RADIX_HISTOGRAM)?,
-            radix_upsweep: ComputePipeline::new(ctx, &module, kernels::RADIX_UPSWEEP)?,
-            radix_spine: ComputePipeline::new(ctx, &module, kernels::RADIX_SPINE)?,
-            radix_downsweep: ComputePipeline::new(ctx, &module, kernels::RADIX_DOWNSWEEP)?,
-            radix_sort_tile: ComputePipeline::new(ctx, &module, kernels::RADIX_SORT_TILE)?,
-            radix_chained: ComputePipeline::new(ctx, &module, kernels::RADIX_CHAINED)?,
-            bitonic_block_sort: ComputePipeline::new(ctx, &module, kernels::BITONIC_BLOCK_SORT)?,
-            bitonic_splitters: ComputePipeline::new(ctx, &module, kernels::BITONIC_SPLITTERS)?,
-            bitonic_merge: ComputePipeline::new(ctx, &module, kernels::BITONIC_MERGE)?,
-            light_keys: ComputePipeline::new(ctx, &module, kernels::LIGHT_KEYS)?,
-            bvh_spheres: ComputePipeline::new(ctx, &module, kernels::BVH_SPHERES)?,
-            bvh_leaves: ComputePipeline::new(ctx, &module, kernels::BVH_LEAVES)?,
-            bvh_level: ComputePipeline::new(ctx, &module, kernels::BVH_LEVEL)?,
-            cluster_light_counts_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_COUNTS_BVH)?,
-            cluster_light_fill_bvh: ComputePipeline::new(ctx, &module, kernels::CLUSTER_LIGHT_FILL_BVH)?,
+            scan_add_offsets: ComputePipeline::new(ctx, module, kernels::SCAN_ADD_OFFSETS)?,
+            scan_store_total: ComputePipeline::new(ctx, module, kernels::SCAN_STORE_TOTAL)?,
+            indirect_args: ComputePipeline::new(ctx, module, kernels::INDIRECT_ARGS)?,
+            scan_counted_total: ComputePipeline::new(ctx, module, kernels::SCAN_COUNTED_TOTAL)?,
+            radix_histogram: ComputePipeline::new(ctx, module, kernels::RADIX_HISTOGRAM)?,
+            radix_upsweep: ComputePipeline::new(ctx, module, kernels::RADIX_UPSWEEP)?,
+            radix_spine: ComputePipeline::new(ctx, module, kernels::RADIX_SPINE)?,
+            radix_downsweep: ComputePipeline::new(ctx, module, kernels::RADIX_DOWNSWEEP)?,
+            radix_sort_tile: ComputePipeline::new(ctx, module, kernels::RADIX_SORT_TILE)?,
+            radix_chained: ComputePipeline::new(ctx, module, kernels::RADIX_CHAINED)?,
+            bitonic_block_sort: ComputePipeline::new(ctx, module, kernels::BITONIC_BLOCK_SORT)?,
+            bitonic_splitters: ComputePipeline::new(ctx, module, kernels::BITONIC_SPLITTERS)?,
+            bitonic_merge: ComputePipeline::new(ctx, module, kernels::BITONIC_MERGE)?,
+            light_keys: ComputePipeline::new(ctx, module, kernels::LIGHT_KEYS)?,
+            bvh_spheres: ComputePipeline::new(ctx, module, kernels::BVH_SPHERES)?,
+            bvh_leaves: ComputePipeline::new(ctx, module, kernels::BVH_LEAVES)?,
+            bvh_level: ComputePipeline::new(ctx, module, kernels::BVH_LEVEL)?,
+            cluster_light_counts_bvh: LightTyped::compute(module, kernels::CLUSTER_LIGHT_COUNTS_BVH),
+            cluster_light_fill_bvh: LightTyped::compute(module, kernels::CLUSTER_LIGHT_FILL_BVH),
             shade_tiled: [
-                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_DIFFUSE)?,
-                ComputePipeline::new(ctx, &module, kernels::SHADE_TILED_SPECULAR)?,
+                LightTyped::compute(module, kernels::SHADE_TILED_DIFFUSE),
+                LightTyped::compute(module, kernels::SHADE_TILED_SPECULAR),
             ],
-            aabb_bounds: ComputePipeline::new(ctx, &module, kernels::AABB_BOUNDS)?,
-            aabb_mark: ComputePipeline::new(ctx, &module, kernels::AABB_MARK)?,
-            aabb_compact: ComputePipeline::new(ctx, &module, kernels::AABB_COMPACT)?,
-            aabb_assign: ComputePipeline::new(ctx, &module, kernels::AABB_ASSIGN)?,
+            aabb_bounds: ComputePipeline::new(ctx, module, kernels::AABB_BOUNDS)?,
+            aabb_mark: ComputePipeline::new(ctx, module, kernels::AABB_MARK)?,
+            aabb_compact: ComputePipeline::new(ctx, module, kernels::AABB_COMPACT)?,
+            aabb_assign: LightTyped::compute(module, kernels::AABB_ASSIGN),
             shade_aabb: [
-                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_DIFFUSE)?,
-                ComputePipeline::new(ctx, &module, kernels::SHADE_AABB_SPECULAR)?,
+                LightTyped::compute(module, kernels::SHADE_AABB_DIFFUSE),
+                LightTyped::compute(module, kernels::SHADE_AABB_SPECULAR),
             ],
             forward_plus_cull: [
-                ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL[0])?,
-                ComputePipeline::new(ctx, &module, kernels::FORWARD_PLUS_CULL[1])?,
+                LightTyped::compute(module, kernels::FORWARD_PLUS_CULL[0]),
+                LightTyped::compute(module, kernels::FORWARD_PLUS_CULL[1]),
             ],
+            forward_plus_cull_widened: kernels::FORWARD_PLUS_CULL_WIDENED.map(|k| LightTyped::compute(module, k)),
         })
     }
 }
@@ -140,27 +151,24 @@ pub struct RasterPipelines {
     pub forward_depth: [GraphicsPipeline<ForwardParams>; 2],
     /// Forward+ shading `[list layout][plain, textured, alpha-tested]` (layouts `[linked, array]`,
     /// `render::forward_plus::TileLists`).
-    pub forward_shade: [[GraphicsPipeline<ForwardParams>; 3]; 2],
+    pub forward_shade: [[LightRaster<ForwardParams>; 3]; 2],
 }
 
 impl RasterPipelines {
-    pub fn new(ctx: &Context) -> VkResult<Self> {
-        let module = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
+    pub fn new(ctx: &Context, module: &Arc<ShaderModule>) -> VkResult<Self> {
         let gbuffer = |target: usize, handles: &[RasterKernel<DrawParams>; 3]| -> VkResult<[GraphicsPipeline<DrawParams>; 3]> {
             let colours = [NORMAL_FORMATS[target], ALBEDO_FORMAT];
-            let make = |h: RasterKernel<DrawParams>| GraphicsPipeline::new(ctx, &module, h.fragment, h, &colours, DepthTest::NearestWrites);
+            let make = |h: RasterKernel<DrawParams>| GraphicsPipeline::new(ctx, module, h.fragment, h, &colours, DepthTest::NearestWrites);
             Ok([make(handles[0])?, make(handles[1])?, make(handles[2])?])
         };
         let colour = [FORWARD_COLOUR_FORMAT];
-        let forward = |h: RasterKernel<ForwardParams>, depth| GraphicsPipeline::new(ctx, &module, h.fragment, h, &colour, depth);
+        let forward = |h: RasterKernel<ForwardParams>, depth| GraphicsPipeline::new(ctx, module, h.fragment, h, &colour, depth);
         let d = &kernels::FORWARD_DEPTH;
-        let shade = |s: &[RasterKernel<ForwardParams>; 3]| -> VkResult<[GraphicsPipeline<ForwardParams>; 3]> {
-            Ok([forward(s[0], DepthTest::EqualReadOnly)?, forward(s[1], DepthTest::EqualReadOnly)?, forward(s[2], DepthTest::EqualReadOnly)?])
-        };
+        let shade = |s: &[RasterKernel<ForwardParams>; 3]| s.map(|h| LightTyped::raster(module, h, &[(FORWARD_COLOUR_FORMAT, Blend::Replace)], DepthTest::EqualReadOnly));
         Ok(Self {
             gbuffer: [gbuffer(0, &kernels::GBUFFER)?, gbuffer(1, &kernels::GBUFFER_F32)?],
             forward_depth: [forward(d[0], DepthTest::NearestWrites)?, forward(d[1], DepthTest::NearestWrites)?],
-            forward_shade: [shade(&kernels::FORWARD_SHADE[0])?, shade(&kernels::FORWARD_SHADE[1])?],
+            forward_shade: [shade(&kernels::FORWARD_SHADE[0]), shade(&kernels::FORWARD_SHADE[1])],
         })
     }
 }
@@ -168,6 +176,11 @@ impl RasterPipelines {
 pub struct Gpu {
     pub kernels: Kernels,
     pub raster: RasterPipelines,
+    /// The compute module ([`COMPUTE_SPV`]): passes that create pipelines of their own (the
+    /// transparent pass, the tessellation) create them from this one.
+    pub compute_module: Arc<ShaderModule>,
+    /// The raster module ([`GRAPHICS_SPV`]), likewise.
+    pub graphics_module: Arc<ShaderModule>,
     pub ctx: Context,
 }
 
@@ -182,15 +195,32 @@ impl Gpu {
     }
 
     fn with_context(ctx: Context) -> VkResult<Self> {
-        let made = Kernels::new(&ctx).and_then(|k| Ok((k, RasterPipelines::new(&ctx)?)));
+        let made = (|| {
+            let compute = Arc::new(ShaderModule::new(&ctx, "manylights compute kernels", COMPUTE_SPV)?);
+            let graphics = Arc::new(ShaderModule::new(&ctx, "manylights raster shaders", GRAPHICS_SPV)?);
+            Ok((Kernels::new(&ctx, &compute)?, RasterPipelines::new(&ctx, &graphics)?, compute, graphics))
+        })();
         match made {
-            Ok((kernels, raster)) => Ok(Self { kernels, raster, ctx }),
+            Ok((kernels, raster, compute_module, graphics_module)) => Ok(Self { kernels, raster, compute_module, graphics_module, ctx }),
             // Name what the validation layer saw, not just the failed call.
             Err(e) => match ctx.take_validation_messages() {
                 m if m.is_empty() => Err(e),
                 m => Err(crate::vk::VkError::Validation { during: e.to_string(), messages: m.join("\n") }),
             },
         }
+    }
+
+    /// The light-type variants (`shaders::light_types::light_type_variant`) of the light-typed
+    /// pipelines created so far ([`LightCompute`], [`LightRaster`]; the transparent pass keeps
+    /// its own): a scene of point lights creates only variant 0.
+    pub fn light_type_variants(&self) -> std::collections::BTreeSet<usize> {
+        let k = &self.kernels;
+        let frame = [&k.shade_clustered[..], &k.shade_deferred, &k.shade_aabb].into_iter().flatten().map(LightTyped::created);
+        let tiled = [&k.shade_tiled, &k.forward_plus_cull, &k.forward_plus_cull_widened].into_iter().flatten().map(LightTyped::created);
+        let single = [k.cluster_light_counts.created(), k.cluster_light_fill.created(), k.aabb_assign.created()];
+        let bvh = [k.cluster_light_counts_bvh.created(), k.cluster_light_fill_bvh.created()];
+        let raster = self.raster.forward_shade.iter().flatten().map(LightTyped::created);
+        frame.chain(tiled).chain(single).chain(bvh).chain(raster).flatten().collect()
     }
 
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.

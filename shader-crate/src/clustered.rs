@@ -165,12 +165,14 @@ pub fn cluster_light_counts(
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] counts: &mut [u32],
 ) {
+    let p = &crate::light_types::specialise(p, light_types);
     let c = linear_index(wg, nwg, local);
     if c >= p.count {
         return;
@@ -189,6 +191,7 @@ pub fn cluster_light_fill(
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
@@ -196,6 +199,7 @@ pub fn cluster_light_fill(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] list: &mut [u32],
 ) {
+    let p = &crate::light_types::specialise(p, light_types);
     let c = linear_index(wg, nwg, local);
     if c >= p.count || c >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
@@ -217,6 +221,7 @@ specular_entries! {
         #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
         #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
@@ -231,6 +236,7 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         let i = linear_index(wg, nwg, local);
         if i >= p.count {
             return;

@@ -246,6 +246,7 @@ pub fn aabb_assign(
     #[spirv(subgroup_id)] subgroup_id: u32,
     #[spirv(num_subgroups)] num_subgroups: u32,
     #[spirv(push_constant)] p: &FrameParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(workgroup)] shared: &mut [u32; AABB_SHARED_WORDS],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] active: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] boxes: &[ClusterAabb],
@@ -255,6 +256,7 @@ pub fn aabb_assign(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] list: &mut [u32],
 ) {
+    let p = &crate::light_types::specialise(p, light_types);
     let co = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let slot = linear_index(wg, nwg, local_index);
     let num_active = counters[AABB_COUNTER_ACTIVE as usize];
@@ -281,6 +283,7 @@ specular_entries! {
         #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
         #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
@@ -294,6 +297,7 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         let i = linear_index(wg, nwg, local);
         if i >= p.count {
             return;

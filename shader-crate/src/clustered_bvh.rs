@@ -155,6 +155,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(subgroup_id)] subgroup_id: u32,
     #[spirv(num_subgroups)] num_subgroups: u32,
     #[spirv(push_constant)] p: &BvhAssignParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
@@ -165,6 +166,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] staged_lists: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
 ) {
+    let p = &crate::light_types::specialise(p, light_types);
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
     if cl >= p.frame.count {
@@ -193,6 +195,7 @@ pub fn cluster_light_fill_bvh(
     #[spirv(subgroup_id)] subgroup_id: u32,
     #[spirv(num_subgroups)] num_subgroups: u32,
     #[spirv(push_constant)] p: &BvhAssignParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
@@ -205,6 +208,7 @@ pub fn cluster_light_fill_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] counts: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] lights: &[PointLight],
 ) {
+    let p = &crate::light_types::specialise(p, light_types);
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
     if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {

@@ -25,6 +25,7 @@ specular_entries! {
         #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
         #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
@@ -33,6 +34,7 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         let i = linear_index(wg, nwg, local);
         if i >= p.count {
             return;

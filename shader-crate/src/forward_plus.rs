@@ -150,6 +150,7 @@ macro_rules! cull_entry {
             #[spirv(subgroup_id)] subgroup_id: u32,
             #[spirv(num_subgroups)] num_subgroups: u32,
             #[spirv(push_constant)] $p: &TiledParams,
+            #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
             #[spirv(workgroup)] $shared_arg: &mut [u32; $shared],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] $depth: &[f32],
             #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] $lights: &[PointLight],
@@ -158,6 +159,7 @@ macro_rules! cull_entry {
             #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] $entries: &mut [u32],
             $($extra)*
         ) {
+            let $p = &crate::light_types::specialise($p, light_types);
             let $c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index: $local };
             let $widen = $widen_expr;
             $body

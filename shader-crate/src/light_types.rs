@@ -17,9 +17,21 @@
 //! light buffer, so the cone and directional records reach each of them (deferred, clustered,
 //! tiled, Forward+, the transparent pass) without a descriptor change, and a scene without spot
 //! or directional lights uploads, binds and reads nothing more than before. The section a kernel
-//! reads is gated by a frame-uniform `EFFECT_*` bit, so a scene without spots runs no cone code
-//! and a scene without directional lights no directional loop; `FrameParams` is unchanged (the
-//! directional count rides in the effect word's bits [`DIRECTIONAL_COUNT_SHIFT`]`..`).
+//! reads is gated by an `EFFECT_*` bit, so a scene without spots runs no cone code and a scene
+//! without directional lights no directional loop; `FrameParams` is unchanged (the directional
+//! count rides in the effect word's bits [`DIRECTIONAL_COUNT_SHIFT`]`..`).
+//!
+//! # Specialised pipelines
+//!
+//! The light-type bits ([`LIGHT_TYPE_MASK`]: spot, directional and the directional count) do not
+//! come from the push constants: every entry that shades or culls punctual lights takes them as
+//! the specialization constant [`LIGHT_TYPES_SPEC_ID`] and overrides the frame's bits with it
+//! ([`specialise`]). The host creates one pipeline per light-type mix a scene uses
+//! ([`light_type_variant`]: at most [`LIGHT_TYPE_VARIANTS`]), so the driver compiles each with the
+//! bits as constants: a scene without spots has no cone test and no cone falloff in its machine
+//! code, a scene without directional lights no directional records, and one with two directional
+//! lights exactly two. This is the specular variants' "simulate only what the scene calls for"
+//! without an entry point per combination (that would be 10 × the shading entries of the module).
 //!
 //! A cone record ([`spot_record`]) is the view-space unit axis (where the light points), then
 //! `cos θ_inner`, `cos θ_outer`, `sin θ_outer` in the record's `radius`, `colour[0]`, `colour[1]`.
@@ -31,7 +43,7 @@
 //! A directional record ([`directional_record`]) is the view-space unit direction *towards* the
 //! light, its intensity, its colour: irradiance `colour · intensity · n·l` everywhere, no range,
 //! so no culling: every shading pass adds them once per pixel ([`crate::shading::shade_directional_lights`]).
-use crate::layout::PointLight;
+use crate::layout::{FrameParams, PointLight};
 use crate::spot::{cone_meets_sphere, Cone};
 use glam::Vec3;
 
@@ -52,6 +64,64 @@ pub const MAX_DIRECTIONAL_LIGHTS: u32 = 4;
 const _: () = assert!(MAX_DIRECTIONAL_LIGHTS == 4);
 /// `cos θ_outer` (and `cos θ_inner`) of a point light's cone record in a scene with spots.
 pub const POINT_MARKER: f32 = -2.0;
+
+/// Specialization-constant id of the light-type bits (module docs, "Specialised pipelines").
+pub const LIGHT_TYPES_SPEC_ID: u32 = 0;
+// The entries write the literal: `#[spirv(spec_constant(id = 0, default = 0))] light_types: u32`.
+const _: () = assert!(LIGHT_TYPES_SPEC_ID == 0);
+/// The effect bits a light-type specialization carries: [`EFFECT_SPOT`], [`EFFECT_DIRECTIONAL`]
+/// and the directional count.
+///
+/// ```text
+///  bit  6     EFFECT_SPOT
+///  bit  7     EFFECT_DIRECTIONAL
+///  bits 8–10  directional count (0 ..= MAX_DIRECTIONAL_LIGHTS)
+/// ```
+pub const LIGHT_TYPE_MASK: u32 = EFFECT_SPOT | EFFECT_DIRECTIONAL | (7 << DIRECTIONAL_COUNT_SHIFT);
+/// Distinct light-type specializations: spots or not × 0 ..= 4 directional lights.
+pub const LIGHT_TYPE_VARIANTS: usize = 2 * (MAX_DIRECTIONAL_LIGHTS as usize + 1);
+
+/// Index in `0..LIGHT_TYPE_VARIANTS` of the light-type mix of `effects` (the host's pipeline
+/// cache key): `spot + 2 · directional count`.
+#[inline]
+pub fn light_type_variant(effects: u32) -> usize {
+    usize::from(effects & EFFECT_SPOT != 0) + 2 * directional_count(effects) as usize
+}
+
+/// Push constants that carry a [`FrameParams`]: what [`specialise`] rewrites.
+pub trait CarriesFrame: Copy {
+    fn frame_mut(&mut self) -> &mut FrameParams;
+}
+
+impl CarriesFrame for FrameParams {
+    #[inline]
+    fn frame_mut(&mut self) -> &mut FrameParams {
+        self
+    }
+}
+
+macro_rules! carries_frame {
+    ($($t:ty),*) => {
+        $(impl CarriesFrame for $t {
+            #[inline]
+            fn frame_mut(&mut self) -> &mut FrameParams {
+                &mut self.frame
+            }
+        })*
+    };
+}
+carries_frame!(crate::layout::TiledParams, crate::layout::BvhAssignParams, crate::layout::ForwardParams, crate::layout::TransparentParams);
+
+/// `p` with its frame's light-type bits replaced by the entry's specialization constant
+/// `light_types` (module docs): the first line of every light-typed entry, so the kernel never
+/// reads the push constants' light-type bits.
+#[inline]
+pub fn specialise<P: CarriesFrame>(p: &P, light_types: u32) -> P {
+    let mut q = *p;
+    let f = q.frame_mut();
+    f.effects = (f.effects & !LIGHT_TYPE_MASK) | (light_types & LIGHT_TYPE_MASK);
+    q
+}
 
 /// The effect bits of a scene's light types: [`EFFECT_SPOT`] with spots, [`EFFECT_DIRECTIONAL`]
 /// and the count with `directional` (≤ [`MAX_DIRECTIONAL_LIGHTS`]) directional lights.
@@ -169,6 +239,31 @@ mod tests {
         assert!(cone_may_meet(0, &buf, 2, 0, &buf[0], far, 0.1), "without EFFECT_SPOT nothing is culled by a cone");
         assert!(!cone_may_meet(EFFECT_SPOT, &buf, 2, 0, &buf[0], far, 0.1), "behind the spot");
         assert!(cone_may_meet(EFFECT_SPOT, &buf, 2, 1, &buf[1], far, 0.1), "a point light in a scene with spots");
+    }
+
+    #[test]
+    fn specialisation_replaces_the_frames_light_type_bits_only() {
+        let mut p = crate::test_support::frame_params(crate::test_support::grid(64, 32, 16), 10);
+        p.effects = crate::layout::EFFECT_SPECULAR | EFFECT_CULL_SPHERE_ONLY | light_effects(true, 3);
+        let q = specialise(&p, light_effects(false, 1));
+        assert_eq!(q.effects, crate::layout::EFFECT_SPECULAR | EFFECT_CULL_SPHERE_ONLY | light_effects(false, 1));
+        assert_eq!(FrameParams { effects: p.effects, ..q }, p, "nothing else changes");
+        assert_eq!(specialise(&p, 0).effects & LIGHT_TYPE_MASK, 0, "a point-light pipeline ignores the frame's bits");
+        // Bits outside the mask in a specialization value do not leak into the frame.
+        assert_eq!(specialise(&p, !0).effects & !LIGHT_TYPE_MASK, p.effects & !LIGHT_TYPE_MASK);
+        let t = crate::layout::TiledParams { frame: p, mode: 1, _pad: [0; 3] };
+        assert_eq!(specialise(&t, 0).frame.effects, p.effects & !LIGHT_TYPE_MASK);
+        assert_eq!(specialise(&t, 0).mode, 1);
+        // Every mix has its own variant.
+        let mut seen = [false; LIGHT_TYPE_VARIANTS];
+        for spots in [false, true] {
+            for d in 0..=MAX_DIRECTIONAL_LIGHTS {
+                let v = light_type_variant(light_effects(spots, d));
+                assert!(!seen[v], "variant {v} twice");
+                seen[v] = true;
+            }
+        }
+        assert_eq!(light_type_variant(crate::layout::EFFECT_SPECULAR), 0);
     }
 
     #[test]

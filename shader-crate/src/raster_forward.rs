@@ -147,6 +147,7 @@ variant_entries! {
         #[spirv(front_facing)] front_facing: bool,
         #[spirv(frag_coord)] frag: Vec4,
         #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
@@ -155,6 +156,7 @@ variant_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
         out_colour: &mut u32,
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         demote_unless_winner(frag, p, winners);
         *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, Vec3::ONE, p, tiles, entries, lights, materials, counters);
     }
@@ -169,6 +171,7 @@ variant_entries! {
         #[spirv(front_facing)] front_facing: bool,
         #[spirv(frag_coord)] frag: Vec4,
         #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
@@ -178,6 +181,7 @@ variant_entries! {
         #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
         out_colour: &mut u32,
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         demote_unless_winner(frag, p, winners);
         let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
         *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters);
@@ -194,6 +198,7 @@ variant_entries! {
         #[spirv(front_facing)] front_facing: bool,
         #[spirv(frag_coord)] frag: Vec4,
         #[spirv(push_constant)] p: &ForwardParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] tiles: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] lights: &[PointLight],
@@ -204,6 +209,7 @@ variant_entries! {
         #[spirv(descriptor_set = 0, binding = 11)] mask_map: &Texture2d,
         out_colour: &mut u32,
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         demote_unless_winner(frag, p, winners);
         if sample_draw_uniform(mask_map, in_uv).x < ALPHA_CUTOFF {
             spirv_std::arch::demote_to_helper_invocation();

@@ -416,6 +416,7 @@ macro_rules! transparent_entries {
                 #[spirv(frag_coord)] frag: Vec4,
                 #[spirv(primitive_id, flat)] primitive: u32,
                 #[spirv(push_constant)] p: &TransparentParams,
+                #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] bounds: &[f32],
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] page_base: &[u32],
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] slot_rank: &[u32],
@@ -431,6 +432,7 @@ macro_rules! transparent_entries {
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 16)] oit_counters: &mut [u32],
                 $(#[spirv(descriptor_set = 0, binding = $binding)] $tex: &Texture2d,)*
             ) {
+                let p = &crate::light_types::specialise(p, light_types);
                 let texel: Vec3 = $texel;
                 let b = TransparentBuffers { bounds, page_base, slot_rank, unique, cluster_counters, counts, offsets, list, lights, materials };
                 transparent_fragment::<ALL_LIGHTS>(p, &b, frag, in_normal, front_facing, texel, primitive, heads, nodes, oit_counters);
@@ -446,6 +448,7 @@ macro_rules! transparent_entries {
                 #[spirv(front_facing)] front_facing: bool,
                 #[spirv(frag_coord)] frag: Vec4,
                 #[spirv(push_constant)] p: &TransparentParams,
+                #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] bounds: &[f32],
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] page_base: &[u32],
                 #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] slot_rank: &[u32],
@@ -461,6 +464,7 @@ macro_rules! transparent_entries {
                 out_accum: &mut Vec4,
                 out_revealage: &mut f32,
             ) {
+                let p = &crate::light_types::specialise(p, light_types);
                 let texel: Vec3 = $texel;
                 let b = TransparentBuffers { bounds, page_base, slot_rank, unique, cluster_counters, counts, offsets, list, lights, materials };
                 let w = weighted_transparent_fragment::<ALL_LIGHTS>(p, &b, frag, in_normal, front_facing, texel, oit_counters);

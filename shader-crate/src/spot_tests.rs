@@ -121,3 +121,94 @@ fn spheres_at_the_apex_and_on_the_axis_are_kept() {
     assert!(cone_meets_sphere(Vec3::ZERO, &wide, 5.0, Vec3::new(4.0, 0.0, 0.0), 0.01), "a 90° cone is a half-space: its rim plane is kept");
     assert!(!cone_meets_sphere(Vec3::ZERO, &wide, 5.0, Vec3::new(2.0, -1.0, 0.0), 0.5), "below a 90° cone's plane");
 }
+
+/// Points sampled in the box `[min, max]`: its corners, edge midpoints, centre and random points.
+fn box_points(rng: &mut Rng, min: Vec3, max: Vec3) -> Vec<Vec3> {
+    let mut t: Vec<Vec3> = (0..27).map(|k| Vec3::new((k % 3) as f32, ((k / 3) % 3) as f32, (k / 9) as f32) * 0.5).collect();
+    t.extend((0..100).map(|_| Vec3::new(rng.unit(), rng.unit(), rng.unit())));
+    t.into_iter().map(|t| min + (max - min) * t).collect()
+}
+
+/// Degenerate cones at the ends of the allowed range (the inputs refuse outer angles outside
+/// (0°, 90°] and inner > outer — `scene` tests; these are the limits the kernels still see): an
+/// outer angle of 1e-6 rad (a ray: nothing off the axis is lit, and the falloff never exceeds 1),
+/// an inner angle equal to the outer (a hard edge), 0° inner, and exactly 90° (a half-space).
+/// Each stays conservative on sampled boxes, never NaN, and its falloff stays in [0, 1].
+#[test]
+fn degenerate_cones_stay_conservative_and_bounded() {
+    let mut rng = Rng(47);
+    let half_pi = core::f32::consts::FRAC_PI_2;
+    for (inner, outer, what) in [(0.0, 1e-6, "a ray"), (1e-6, 1e-6, "a ray, hard edge"), (0.0, half_pi, "0° inner, 90° outer"), (half_pi, half_pi, "90° hard edge"), (0.4, 0.4, "hard edge")] {
+        let mut kept = 0;
+        for _ in 0..400 {
+            let cone = Cone::new(unit(&mut rng), inner, outer);
+            assert!(cone.cos_outer.is_finite() && cone.sin_outer.is_finite(), "{what}: {cone:?}");
+            let min = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 8.0 - 4.0;
+            let max = min + Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 3.0 + 0.01;
+            let range = 6.0;
+            let points = box_points(&mut rng, min, max);
+            for &p in &points {
+                let f = spot_factor(Vec3::ZERO, &cone, p);
+                assert!((0.0..=1.0).contains(&f), "{what}: falloff {f} at {p}");
+            }
+            if cone_meets_box(Vec3::ZERO, &cone, range, min, max) {
+                kept += 1;
+                continue;
+            }
+            for p in points {
+                assert!(!lit(Vec3::ZERO, &cone, range, p), "{what}: box [{min}, {max}] rejected but {p} is lit ({cone:?})");
+            }
+        }
+        assert!(kept > 0 && kept < 400, "{what}: the test decides both ways ({kept} of 400 kept)");
+    }
+    // A ray lights (almost) nothing off its axis: a box beside it is rejected, one on it kept.
+    let ray = Cone::new(Vec3::X, 0.0, 1e-6);
+    assert!(!cone_meets_box(Vec3::ZERO, &ray, 10.0, Vec3::new(1.0, 1.0, -0.5), Vec3::new(2.0, 2.0, 0.5)));
+    assert!(cone_meets_box(Vec3::ZERO, &ray, 10.0, Vec3::new(1.0, -0.5, -0.5), Vec3::new(2.0, 0.5, 0.5)));
+}
+
+/// A spot whose apex is exactly a corner of a cluster's box (the real boxes of a cluster grid,
+/// `cluster_bounds`), pointing in every direction: that cluster is always kept (the apex lies on
+/// its bounding sphere, and a cone opening into the box lights it), and the clusters around it —
+/// up to two steps away along each axis — are kept whenever one of their sampled points is lit
+/// (conservative), while the cone test still rejects many of them.
+#[test]
+fn a_spot_at_a_cluster_corner_keeps_the_clusters_it_lights() {
+    use crate::cluster_bounds::cluster_aabb_of_key;
+    use crate::cluster_key::slice_bounds;
+    let g = crate::test_support::grid(640, 360, 32);
+    let bounds = slice_bounds(&g);
+    let aabb = |i: u32, j: u32, k: u32| {
+        let b = cluster_aabb_of_key(&g, &bounds, g.pack(i, j, k));
+        (Vec3::from_array(b.min), Vec3::from_array(b.max))
+    };
+    let step = |rng: &mut Rng, v: u32, n: u32| (v as i32 + rng.below(5) as i32 - 2).clamp(0, n as i32 - 1) as u32;
+    let mut rng = Rng(53);
+    let (mut neighbours, mut rejected) = (0, 0);
+    for _ in 0..300 {
+        let (i, j, k) = (rng.below(g.tiles_x), rng.below(g.tiles_y), rng.below(g.num_slices));
+        let (min, max) = aabb(i, j, k);
+        let c = rng.below(8);
+        let corner = Vec3::new(if c & 1 != 0 { max.x } else { min.x }, if c & 2 != 0 { max.y } else { min.y }, if c & 4 != 0 { max.z } else { min.z });
+        let range = (max - min).length() * (1.0 + 2.0 * rng.unit());
+        for _ in 0..8 {
+            let outer = (1.0 + rng.unit() * 89.0).to_radians();
+            let into = ((min + max) * 0.5 - corner).normalize();
+            for dir in [into, -into, unit(&mut rng)] {
+                let cone = Cone::new(dir, outer * rng.unit(), outer);
+                assert!(cone_meets_box(corner, &cone, range, min, max), "cluster ({i}, {j}, {k}) with the apex at its corner {corner} rejected ({cone:?})");
+                let (ni, nj, nk) = (step(&mut rng, i, g.tiles_x), step(&mut rng, j, g.tiles_y), step(&mut rng, k, g.num_slices));
+                let (nmin, nmax) = aabb(ni, nj, nk);
+                neighbours += 1;
+                if cone_meets_box(corner, &cone, range, nmin, nmax) {
+                    continue;
+                }
+                rejected += 1;
+                for p in box_points(&mut rng, nmin, nmax) {
+                    assert!(!lit(corner, &cone, range, p), "cluster ({ni}, {nj}, {nk}) rejected but {p} is lit by the spot at {corner} ({cone:?})");
+                }
+            }
+        }
+    }
+    assert!(rejected * 5 > neighbours, "the cone test rejects a share of the neighbours: {rejected} of {neighbours}");
+}

@@ -139,6 +139,7 @@ specular_entries! {
         #[spirv(subgroup_id)] subgroup_id: u32,
         #[spirv(num_subgroups)] num_subgroups: u32,
         #[spirv(push_constant)] p: &TiledParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(workgroup)] shared: &mut [u32; TILED_SHARED_WORDS],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
@@ -149,6 +150,7 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] tile_lights: &mut [u32],
     ) {
+        let p = &crate::light_types::specialise(p, light_types);
         let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
         let o = shade_tile::<_, _, SPECULAR>(&c, shared, p, wg.x, wg.y, depth, normals, albedo, lights, materials, bounds);
         let mut slot = 0;

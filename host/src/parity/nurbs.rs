@@ -108,7 +108,7 @@ fn run(gpu: &Gpu, packed: &NurbsBuffers, levels: Option<TessLevelParams>) -> Res
     if levels.is_some() {
         geometry.indirect_args = Some(Buffer::storage(ctx, "nurbs draw arguments", 4 * DRAW_ARGS_WORDS as u64 * n as u64)?);
     }
-    let mut pass = Tessellation::new(ctx, packed, first_vertex, first_index, levels)?;
+    let mut pass = Tessellation::new(ctx, &gpu.compute_module, packed, first_vertex, first_index, levels)?;
     gpu.run(None, |rec| pass.record(rec, &geometry))?;
     let v = packed.vertices as usize;
     let w = Written {

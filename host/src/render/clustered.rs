@@ -74,7 +74,7 @@ impl Clustered {
     fn new(gpu: &Gpu, f: &FrameInputs<'_>, bvh: Option<LightBvh>) -> Result<Self> {
         let grid = f.params.grid;
         let caps = Capacities::initial(&grid, f.params.num_lights);
-        let transparency = Transparency::new(f, &gpu.ctx, Some(TRANSPARENT_MARK_PAGES)).context("creating the transparent pass")?;
+        let transparency = Transparency::new(f, gpu, Some(TRANSPARENT_MARK_PAGES)).context("creating the transparent pass")?;
         let buffers = ClusterBuffers::new(gpu, &grid, caps, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
         Ok(Self { bvh, grid, buffers, transparency, last: (0, 0, 0) })
     }
@@ -314,15 +314,15 @@ impl ClusterBuffers {
             let staged_clusters = self.staged_clusters;
             let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, staged_clusters, _pad: [0; 2] }));
             let per_group = match walk {
-                None => k.cluster_light_counts.kernel.invocations(),
-                Some(_) => rec.subgroup_items_per_group(&k.cluster_light_counts_bvh),
+                None => shaders::kernels::CLUSTER_LIGHT_COUNTS.invocations(),
+                Some(_) => rec.subgroup_items_per_group(k.cluster_light_counts_bvh.get(c.effects)?),
             };
             let p = IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, per_group, ARGS_ASSIGNMENT);
             rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
             match walk {
-                None => rec.dispatch_indirect(&k.cluster_light_counts, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,
+                None => rec.dispatch_indirect(k.cluster_light_counts.get(c.effects)?, &[&self.unique, &self.counters, bounds, lights, &self.counts], &c, args, ARGS_ASSIGNMENT)?,
                 Some((b, st, w)) => rec.dispatch_indirect(
-                    &k.cluster_light_counts_bvh,
+                    k.cluster_light_counts_bvh.get(c.effects)?,
                     &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes, st, lights],
                     &w,
                     args,
@@ -334,9 +334,9 @@ impl ClusterBuffers {
             let unique = Counted { counter: COUNTER_UNIQUE_CLUSTERS, scale: 1 };
             self.cluster_scan.record_counted(gpu, rec, &self.counts, &self.offsets, &self.counters, unique, Some(COUNTER_LIGHT_REFS))?;
             match walk {
-                None => rec.dispatch_indirect(&k.cluster_light_fill, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
+                None => rec.dispatch_indirect(k.cluster_light_fill.get(c.effects)?, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
                 Some((b, st, w)) => rec.dispatch_indirect(
-                    &k.cluster_light_fill_bvh,
+                    k.cluster_light_fill_bvh.get(c.effects)?,
                     &[&self.unique, &self.counters, bounds, &b.spheres, &self.offsets, &self.list, &b.order, &b.nodes, st, &self.counts, lights],
                     &w,
                     args,
@@ -346,7 +346,7 @@ impl ClusterBuffers {
         })?;
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
-                &k.shade_clustered[super::specular_variant(p)],
+                super::shading_pipeline(&k.shade_clustered, p)?,
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.keys, &self.page_base, &self.slot_rank, &self.counts, &self.offsets, &self.list, lights, materials, frame, bounds],
                 p,
                 n,

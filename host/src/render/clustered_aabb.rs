@@ -45,7 +45,7 @@ pub struct ClusteredAabb {
 impl ClusteredAabb {
     /// Allocates for the frame's grid and computes every cluster's box.
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
-        let transparency = Transparency::new(f, &gpu.ctx, Some(TRANSPARENT_DENSE_GRID)).context("creating the transparent pass")?;
+        let transparency = Transparency::new(f, gpu, Some(TRANSPARENT_DENSE_GRID)).context("creating the transparent pass")?;
         let mut t = Self::allocate(gpu, &f.params, f.bounds, initial_list_capacity(f.params.num_lights), transparency.is_some()).context("allocating the clustered-aabb buffers")?;
         t.transparency = transparency;
         Ok(t)
@@ -129,7 +129,7 @@ impl LightingTechnique for ClusteredAabb {
         })?;
         rec.pass("assignment", |rec| {
             rec.dispatch_linear(
-                &k.aabb_assign,
+                k.aabb_assign.get(p.effects)?,
                 &[&self.active, &self.boxes, f.lights, &self.counters, &self.offsets, &self.counts, &self.list],
                 &FrameParams { count: self.slots, ..p },
                 self.slots,
@@ -137,7 +137,7 @@ impl LightingTechnique for ClusteredAabb {
         })?;
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
-                &k.shade_aabb[super::specular_variant(&p)],
+                super::shading_pipeline(&k.shade_aabb, &p)?,
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters, f.lights, f.materials, f.frame, f.bounds],
                 &p,
                 n,

@@ -14,7 +14,7 @@ pub struct Deferred {
 
 impl Deferred {
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
-        Ok(Self { transparency: Transparency::new(f, &gpu.ctx, None).context("creating the transparent pass")? })
+        Ok(Self { transparency: Transparency::new(f, gpu, None).context("creating the transparent pass")? })
     }
 }
 
@@ -23,7 +23,7 @@ impl LightingTechnique for Deferred {
         let (t, p) = (f.targets, &f.params);
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
-                &gpu.kernels.shade_deferred[super::specular_variant(p)],
+                super::shading_pipeline(&gpu.kernels.shade_deferred, p)?,
                 &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds],
                 p,
                 p.count,

@@ -31,8 +31,8 @@
 use super::technique::{grew_together, grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use super::Draw;
-use crate::gpu::{Gpu, COMPUTE_SPV, FORWARD_COLOUR_FORMAT};
-use crate::vk::{Attachment, Buffer, ComputePipeline, GraphicsPipeline, Image, ImageUse, Load, Recorder, ShaderModule, TargetFormat, VkResult};
+use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
+use crate::vk::{Attachment, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
 use shaders::forward_plus::MAX_LIGHTS_LLVMPIPE;
 use shaders::shading::NO_NODE;
@@ -100,11 +100,10 @@ impl TileLists {
 }
 
 /// What scenes with transparent draws add: the transparent pass, the tiles' transparent depth
-/// ranges and the culling kernel that widens the tiles' bounds to them.
+/// ranges (`Kernels::forward_plus_cull_widened` culls with the tiles' bounds widened to them).
 struct TransparentTiles {
     pass: Transparency,
     depths: Buffer,
-    cull: ComputePipeline<TiledParams>,
 }
 
 pub struct ForwardPlus {
@@ -149,13 +148,11 @@ impl ForwardPlus {
         let lists = f.settings.fp_lists;
         let tile_bytes = 4 * lists.words().0 * (g.tiles_x * g.tiles_y) as u64;
         let reversed: Vec<u32> = f.indices.chunks_exact(3).rev().flatten().copied().collect();
-        let transparent = match Transparency::new(f, ctx, Some(lists.transparent_lists())).context("creating the transparent pass")? {
+        let transparent = match Transparency::new(f, gpu, Some(lists.transparent_lists())).context("creating the transparent pass")? {
             None => None,
             Some(pass) => {
-                let module = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
                 let depths = Buffer::storage(ctx, "tile transparent depths", 4 * TILE_DEPTH_WORDS as u64 * (g.tiles_x * g.tiles_y) as u64)?;
-                let cull = ComputePipeline::new(ctx, &module, shaders::kernels::FORWARD_PLUS_CULL_WIDENED[lists.index()])?;
-                Some(TransparentTiles { pass, depths, cull })
+                Some(TransparentTiles { pass, depths })
             }
         };
         let made = (|| -> VkResult<Self> {
@@ -192,7 +189,7 @@ impl ForwardPlus {
     ///
     /// The forward pass (`forward`) draws everything in reverse order: of coplanar fragments,
     /// which all pass EQUAL, the last one drawn — the first in scene order, the G-buffer's — stays.
-    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, pipes: &[GraphicsPipeline<ForwardParams>], extra: &[&Buffer], forward: bool) -> VkResult<()> {
+    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, pipes: &[&GraphicsPipeline<ForwardParams>], extra: &[&Buffer], forward: bool) -> VkResult<()> {
         let draws: Vec<(usize, &Draw)> = f.geometry.draws.iter().enumerate().filter(|(_, d)| d.index_count > 0).collect();
         let order: Vec<(usize, &Draw)> = if forward { draws.into_iter().rev().collect() } else { draws };
         for (index, draw) in order {
@@ -205,7 +202,7 @@ impl ForwardPlus {
             };
             let bindings = f.draw_bindings(extra, draw, textures);
             let push = ForwardParams { frame: FrameParams { light_capacity: self.capacity, count: index as u32, ..self.params.frame }, draw: draw.params };
-            rec.draw_indexed(&pipes[variant], &bindings, &push, first_index, draw.index_count)?;
+            rec.draw_indexed(pipes[variant], &bindings, &push, first_index, draw.index_count)?;
         }
         Ok(())
     }
@@ -254,7 +251,7 @@ impl LightingTechnique for ForwardPlus {
             rec.transition(&self.winner, ImageUse::Undefined, ImageUse::ColourTarget);
             let winner = Attachment { image: &self.winner, load: Load::ClearU32([u32::MAX, 0, 0, 0]) };
             rec.begin_rendering(&[winner], Attachment { image: &self.depth, load: Load::ClearDepth(0.0) }, &f.geometry.indices);
-            self.draw_all(rec, f, &raster.forward_depth, &[], false)?;
+            self.draw_all(rec, f, &raster.forward_depth.each_ref(), &[], false)?;
             rec.end_rendering();
             rec.transition(&self.winner, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.transition(&self.depth, ImageUse::DepthTarget, ImageUse::CopySource);
@@ -278,10 +275,10 @@ impl LightingTechnique for ForwardPlus {
             let p = TiledParams { frame: FrameParams { light_capacity: self.capacity, ..self.params.frame }, ..self.params };
             let buffers = [&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries];
             match &self.transparent {
-                None => rec.dispatch(&gpu.kernels.forward_plus_cull[self.lists.index()], &buffers, &p, [g.tiles_x, g.tiles_y, 1])?,
+                None => rec.dispatch(gpu.kernels.forward_plus_cull[self.lists.index()].get(p.frame.effects)?, &buffers, &p, [g.tiles_x, g.tiles_y, 1])?,
                 Some(t) => {
                     let widened: Vec<&Buffer> = buffers.into_iter().chain([&t.depths]).collect();
-                    rec.dispatch(&t.cull, &widened, &p, [g.tiles_x, g.tiles_y, 1])?
+                    rec.dispatch(gpu.kernels.forward_plus_cull_widened[self.lists.index()].get(p.frame.effects)?, &widened, &p, [g.tiles_x, g.tiles_y, 1])?
                 }
             }
             // The lists (and the counter) are read by the forward pass's fragments; every
@@ -294,7 +291,9 @@ impl LightingTechnique for ForwardPlus {
             let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::shading::BACKGROUND_RGBA8, 0, 0, 0]) };
             rec.begin_rendering(&[colour], Attachment { image: &self.depth, load: Load::Keep }, &self.reversed);
             let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners];
-            self.draw_all(rec, f, &raster.forward_shade[self.lists.index()], &extra, true)?;
+            // The variants for the frame's light types.
+            let [a, b, c] = raster.forward_shade[self.lists.index()].each_ref().map(|v| v.get(self.params.frame.effects));
+            self.draw_all(rec, f, &[a?, b?, c?], &extra, true)?;
             rec.end_rendering();
             rec.transition(&self.colour, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.copy_to_buffers(&[(&self.colour, f.frame)]);

@@ -248,6 +248,12 @@ pub fn specular_variant(p: &FrameParams) -> usize {
     usize::from(p.effects & EFFECT_SPECULAR != 0)
 }
 
+/// The pipeline of a frame's shading kernel: its specular variant ([`specular_variant`]) for the
+/// frame's light types (`vk::light_typed`).
+pub fn shading_pipeline<'g, P: bytemuck::Pod>(variants: &'g [crate::gpu::LightCompute<P>; 2], p: &FrameParams) -> crate::vk::VkResult<&'g crate::vk::ComputePipeline<P>> {
+    variants[specular_variant(p)].get(p.effects)
+}
+
 /// Lights per pixel at the top of the heatmap ramp.
 pub const HEAT_MAX: u32 = 64;
 

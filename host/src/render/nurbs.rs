@@ -50,7 +50,7 @@
 //! draw arguments per patch.
 use super::gbuffer::{Draw, Geometry};
 use super::{SceneInput, Settings, Technique, ViewTransform};
-use crate::gpu::COMPUTE_SPV;
+use crate::gpu::Gpu;
 use crate::scene::nurbs::{NurbsBuffers, NurbsPatch};
 use crate::vk::{Buffer, ComputePipeline, Context, Recorder, ShaderModule, VkResult};
 use anyhow::{bail, Result};
@@ -125,12 +125,11 @@ impl Tessellation {
     /// Uploads packed patches (`first_vertex`, `first_index`: where their grids start) and
     /// creates the pass's pipelines; `levels`: adaptive levels with these parameters (the
     /// geometry to record into then has the draw arguments, [`Geometry::indirect_args`]).
-    pub fn new(ctx: &Context, packed: &NurbsBuffers, first_vertex: u32, first_index: u32, levels: Option<TessLevelParams>) -> VkResult<Self> {
-        let module = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
+    pub fn new(ctx: &Context, module: &ShaderModule, packed: &NurbsBuffers, first_vertex: u32, first_index: u32, levels: Option<TessLevelParams>) -> VkResult<Self> {
         Ok(Self {
-            vertices: ComputePipeline::new(ctx, &module, kernels::NURBS_VERTICES)?,
-            indices: ComputePipeline::new(ctx, &module, kernels::NURBS_INDICES)?,
-            levels: levels.map(|l| Ok::<_, crate::vk::VkError>((ComputePipeline::new(ctx, &module, kernels::NURBS_LEVELS)?, l))).transpose()?,
+            vertices: ComputePipeline::new(ctx, module, kernels::NURBS_VERTICES)?,
+            indices: ComputePipeline::new(ctx, module, kernels::NURBS_INDICES)?,
+            levels: levels.map(|l| Ok::<_, crate::vk::VkError>((ComputePipeline::new(ctx, module, kernels::NURBS_LEVELS)?, l))).transpose()?,
             headers: Buffer::from_slice(ctx, "nurbs patches", &packed.patches)?,
             knots: Buffer::from_slice(ctx, "nurbs knots", &packed.knots)?,
             control_points: Buffer::from_slice(ctx, "nurbs control points", &packed.control_points)?,
@@ -199,7 +198,8 @@ pub fn params(packed: &NurbsBuffers, first_vertex: u32, first_index: u32) -> Tes
 /// grids, the tessellation pass that writes them (`None` for a scene without patches), and the
 /// merged index list on the CPU (Forward+'s copy; with adaptive levels, which Forward+ refuses,
 /// the meshes' alone).
-pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[f32; 3]], s: &Settings) -> Result<(Geometry, Option<Tessellation>, Cow<'a, [u32]>)> {
+pub fn upload_geometry<'a>(gpu: &Gpu, scene: &SceneInput<'a>, positions: &[[f32; 3]], s: &Settings) -> Result<(Geometry, Option<Tessellation>, Cow<'a, [u32]>)> {
+    let ctx = &gpu.ctx;
     let upload = |draws: &[Draw], extra| Geometry::upload_reserving(ctx, positions, scene.normals, scene.uvs, scene.indices, draws, &scene.materials, extra);
     if scene.nurbs.is_empty() {
         return Ok((upload(&scene.draws, [0, 0])?, None, Cow::Borrowed(scene.indices)));
@@ -212,7 +212,7 @@ pub fn upload_geometry<'a>(ctx: &Context, scene: &SceneInput<'a>, positions: &[[
     crate::vk::memory::check_range(ctx, "indices with the NURBS grids", 4 * indices)?;
     let draws: Vec<Draw> = scene.draws.iter().chain(&nurbs_draws).copied().collect();
     let mut geometry = upload(&draws, [vertices - first_vertex as u64, indices - first_index as u64])?;
-    let pass = Tessellation::new(ctx, &packed, first_vertex, first_index, levels)?;
+    let pass = Tessellation::new(ctx, &gpu.compute_module, &packed, first_vertex, first_index, levels)?;
     if levels.is_some() {
         geometry.indirect_args = Some(Buffer::storage(ctx, "nurbs draw arguments", 4 * DRAW_ARGS_WORDS as u64 * packed.patches.len() as u64)?);
         return Ok((geometry, Some(pass), Cow::Borrowed(scene.indices)));

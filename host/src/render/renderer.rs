@@ -150,7 +150,7 @@ impl Renderer {
         let n = s.width * s.height;
         let lights_view = lights_to_view(&scene.view, scene.lights)?;
         let positions = scene.view.relative_positions(scene.positions);
-        let (geometry, tessellation, indices) = super::nurbs::upload_geometry(ctx, scene, &positions, s).context("uploading geometry")?;
+        let (geometry, tessellation, indices) = super::nurbs::upload_geometry(gpu, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
         let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
         let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;

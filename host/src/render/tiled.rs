@@ -58,7 +58,7 @@ impl LightingTechnique for Tiled {
         let g = f.targets;
         rec.pass("culling + shading", |rec| {
             rec.dispatch(
-                &gpu.kernels.shade_tiled[super::specular_variant(&self.params.frame)],
+                super::shading_pipeline(&gpu.kernels.shade_tiled, &self.params.frame)?,
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.tile_lights],
                 &self.params,
                 [grid.tiles_x, grid.tiles_y, 1],

@@ -34,8 +34,8 @@
 use super::gbuffer::Draw;
 use super::technique::{grown_capacity, FrameInputs};
 use super::Technique;
-use crate::gpu::{COMPUTE_SPV, GRAPHICS_SPV};
-use crate::vk::{Attachment, Blend, Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, Load, Recorder, ShaderModule, TargetFormat, VkResult};
+use crate::gpu::{Gpu, LightRaster};
+use crate::vk::{Attachment, Blend, Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, LightTyped, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{Context as _, Result};
 use shaders::kernels;
 use shaders::layout::*;
@@ -187,7 +187,8 @@ pub struct Transparency {
     /// `TransparentDraw::lists` of the transparent pass (the technique's lists).
     lists: u32,
     keys: Option<GraphicsPipeline<TransparentParams>>,
-    shade: [GraphicsPipeline<TransparentParams>; 3],
+    /// `[plain, textured, alpha-tested]`, for the frame's light types.
+    shade: [LightRaster<TransparentParams>; 3],
     resolve: ComputePipeline<OitParams>,
     store: Store,
     counters: Buffer,
@@ -205,21 +206,21 @@ impl Transparency {
     /// allocated or created), over the technique's `lists` (`TRANSPARENT_MARK_PAGES` …
     /// `TRANSPARENT_TILE_LINKED`); `None`: every fragment sums every light (the brute-force
     /// reference).
-    pub fn new(f: &FrameInputs<'_>, ctx: &crate::vk::Context, lists: Option<u32>) -> Result<Option<Self>> {
+    pub fn new(f: &FrameInputs<'_>, gpu: &Gpu, lists: Option<u32>) -> Result<Option<Self>> {
+        let ctx = &gpu.ctx;
         let all_lights = lists.is_none();
         let draws = &f.geometry.transparent;
         if draws.is_empty() {
             return Ok(None);
         }
         let weighted = f.settings.oit == OitVariant::Weighted;
-        let raster = ShaderModule::new(ctx, "manylights raster shaders", GRAPHICS_SPV)?;
         let colours: &[(TargetFormat, Blend)] = if weighted { &WEIGHTED_TARGETS } else { &[] };
-        let pipe = |h: kernels::RasterKernel<TransparentParams>, colours| GraphicsPipeline::blended(ctx, &raster, h.fragment, h, colours, DepthTest::NearerReadOnly);
+        let raster = &gpu.graphics_module;
+        let pipe = |h: kernels::RasterKernel<TransparentParams>, colours| GraphicsPipeline::blended(ctx, raster, h.fragment, h, colours, DepthTest::NearerReadOnly);
         let keys = if all_lights { None } else { Some(pipe(kernels::TRANSPARENT_KEYS, &[])?) };
         let s = if weighted { &kernels::TRANSPARENT_WEIGHTED } else { &kernels::TRANSPARENT_SHADE }[usize::from(all_lights)];
-        let shade = [pipe(s[0], colours)?, pipe(s[1], colours)?, pipe(s[2], colours)?];
-        let compute = ShaderModule::new(ctx, "manylights compute kernels", COMPUTE_SPV)?;
-        let resolve = ComputePipeline::new(ctx, &compute, if weighted { kernels::OIT_RESOLVE_WEIGHTED } else { kernels::OIT_RESOLVE })?;
+        let shade = s.map(|h| LightTyped::raster(raster, h, colours, DepthTest::NearerReadOnly));
+        let resolve = ComputePipeline::new(ctx, &gpu.compute_module, if weighted { kernels::OIT_RESOLVE_WEIGHTED } else { kernels::OIT_RESOLVE })?;
         let (pixels, g) = (f.params.count as u64, &f.params.grid);
         let store = if weighted {
             let [(accum, _), (revealage, _)] = WEIGHTED_TARGETS;
@@ -298,7 +299,7 @@ impl Transparency {
         for (i, d) in f.geometry.transparent.iter().enumerate() {
             let (pipe, textures) = match (&self.keys, keys) {
                 (Some(k), Some(_)) => (k, 0),
-                _ => (&self.shade[d.variant()], d.variant()),
+                _ => (self.shade[d.variant()].get(frame.effects)?, d.variant()),
             };
             let bindings = f.draw_bindings(extra, d, textures);
             rec.draw_indexed(pipe, &bindings, &self.push(f, frame, i, keys.unwrap_or(self.lists)), d.first_index, d.index_count)?;

@@ -395,6 +395,11 @@ fn descriptions_with_light_types() {
     let spot = "type = \"spot\"\nposition = [0, 1, 0]\nradius = 4\ndirection = [0, -1, 0]";
     for (body, wanted) in [
         (format!("{spot}\nouter_angle = 95"), "light[1].outer_angle = 95 is out of range"),
+        // The degenerate ends: a 0° cone lights nothing, a 180° one is no cone (the cone test
+        // assumes at most 90°).
+        (format!("{spot}\nouter_angle = 0"), "light[1].outer_angle = 0 is out of range: it must be in (0, 90] degrees"),
+        (format!("{spot}\nouter_angle = 180"), "light[1].outer_angle = 180 is out of range"),
+        (format!("{spot}\nouter_angle = 20\ninner_angle = -1"), "light[1].inner_angle = -1 is out of range"),
         (format!("{spot}\nouter_angle = 30\ninner_angle = 40"), "light[1].inner_angle = 40 is out of range"),
         (format!("{spot}\nouter_angle = nan"), "light[1].outer_angle must be finite"),
         ("type = \"spot\"\nposition = [0, 1, 0]\nradius = 4\ndirection = [0, 0, 0]".into(), "light[1].direction = [0.0, 0.0, 0.0] has no direction"),

@@ -17,7 +17,7 @@ use shaders::kernels::Kernel;
 use std::ffi::CString;
 
 pub struct ShaderModule {
-    ctx: Context,
+    pub(crate) ctx: Context,
     pub raw: vk::ShaderModule,
 }
 
@@ -48,8 +48,23 @@ pub struct ComputePipeline<P> {
     pub kernel: Kernel<P>,
 }
 
+/// Specialization-constant values `(id, value)` of a pipeline (32-bit constants).
+pub type SpecValues<'a> = &'a [(u32, u32)];
+
+/// The map entries and data of `values`, as `vk::SpecializationInfo` takes them.
+pub(crate) fn spec_map(values: SpecValues<'_>) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
+    let entries = values.iter().enumerate().map(|(i, &(id, _))| vk::SpecializationMapEntry { constant_id: id, offset: 4 * i as u32, size: 4 }).collect();
+    let data = values.iter().flat_map(|&(_, v)| v.to_ne_bytes()).collect();
+    (entries, data)
+}
+
 impl<P: Pod> ComputePipeline<P> {
     pub fn new(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>) -> VkResult<Self> {
+        Self::specialised(ctx, module, kernel, &[])
+    }
+
+    /// [`ComputePipeline::new`] with specialization constants `spec`.
+    pub fn specialised(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>, spec: SpecValues<'_>) -> VkResult<Self> {
         let d = &ctx.device;
         let bindings: Vec<_> = (0..kernel.storage_buffers)
             .map(|b| {
@@ -80,10 +95,15 @@ impl<P: Pod> ComputePipeline<P> {
             }
         };
         let entry = CString::new(kernel.entry).expect("entry names have no NUL");
+        let (map, data) = spec_map(spec);
+        let spec_info = vk::SpecializationInfo::default().map_entries(&map).data(&data);
         let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.raw)
             .name(&entry);
+        if !spec.is_empty() {
+            stage = stage.specialization_info(&spec_info);
+        }
         let full = kernel.cooperative
             && ctx.info.full_subgroups
             && kernel.workgroup_size[0].is_multiple_of(ctx.info.max_subgroup_size);
