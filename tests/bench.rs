@@ -23,7 +23,8 @@ fn tiny_bench_writes_csv_plots_and_markdown() {
     assert!(run.ok, "bench failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("results.csv"));
     assert_eq!(csv.header, CSV_COLUMNS, "results.csv header");
-    let numeric = |c: &str| !matches!(c, "scene" | "technique" | "stage" | "queue" | "kind");
+    // Without --spot-fraction the share of spots is 0 and the culling the default.
+    let numeric = |c: &str| !matches!(c, "scene" | "technique" | "stage" | "queue" | "kind" | "spot_fraction" | "spot_culling");
     // (technique, lights) → stage → row.
     let mut configs: BTreeMap<(String, u64), BTreeMap<String, common::csv::Row>> = BTreeMap::new();
     for row in csv.rows() {
@@ -32,6 +33,7 @@ fn tiny_bench_writes_csv_plots_and_markdown() {
             assert!(v.is_finite() && v > 0.0, "{col} = {v} is not finite and positive (row {:?})", row.cells);
         }
         assert_eq!((row.get("scene"), row.get("width"), row.get("height"), row.get("frames")), ("city", "96", "54", "2"), "row {:?}", row.cells);
+        assert_eq!((row.get("spot_fraction"), row.get("spot_culling")), ("0", "cone"), "row {:?}", row.cells);
         assert!(row.num("min_ms") <= row.num("median_ms") && row.num("median_ms") <= row.num("max_ms"), "min ≤ median ≤ max: {:?}", row.cells);
         let key = (row.get("technique").to_string(), row.num("lights") as u64);
         let stage = row.get("stage").to_string();
@@ -89,6 +91,15 @@ fn bench_bad_input_is_a_one_line_error() {
         (vec!["--techniques", "warp-drive"], "unknown technique"),
         (vec!["--lights", "0"], "positive light counts"),
         (vec!["--scenes", "no-such-scene.obj"], "no-such-scene"),
+        (vec!["--spot-fraction", "1.5"], "--spot-fraction"),
+        (vec!["--spot-fraction", "-0.1"], "--spot-fraction"),
+        (vec!["--spot-fraction", "nan"], "--spot-fraction"),
+        (vec!["--spot-fraction", "half"], "--spot-fraction"),
+        (vec!["--spot-culling", "sphere"], "no spot lights to cull"),
+        (vec!["--spot-culling", "both"], "no spot lights to cull"),
+        (vec!["--spot-fraction", "0", "--spot-culling", "both"], "no spot lights to cull"),
+        (vec!["--spot-fraction", "0.5", "--spot-culling", "cones"], "--spot-culling"),
+        (vec!["--spot-fraction", "0.5", "--study", "accuracy"], "accuracy study"),
     ] {
         let out = dir.path().to_str().unwrap();
         let run = manylights(["bench"].into_iter().chain(args.iter().copied()).chain(["--width", "32", "--height", "18", "--frames", "1", "--out", out]));
@@ -250,4 +261,98 @@ fn bench_flies_a_camera_path() {
     std::fs::write(&path, "0,20,60,0,-10\n0,20\n").unwrap();
     let bad = manylights(["bench", "--lights", "200", "--scenes", "city", "--width", "64", "--height", "36", "--camera-path", path.to_str().unwrap(), "--out", out]);
     assert_one_line_error(&bad, "a malformed path", "path.txt:2");
+}
+
+/// `--spot-fraction 0.5 --spot-culling both`: every technique is measured with cone culling and
+/// with range-sphere culling of the same lights (half of them spots); each row says its share
+/// and culling; the sphere rows of the clustered techniques have longer lists than their cone
+/// rows (the knob reaches the kernels) and no technique's lists get shorter; both are timed,
+/// drawn as separate lines, and tabled in `results.md`.
+#[test]
+fn bench_spot_culling_both() {
+    let dir = TempDir::new("bench-spots");
+    let out = dir.path().to_str().unwrap();
+    let techniques = ["clustered-bvh", "clustered-aabb", "clustered-naive", "forward-plus"];
+    let run = manylights([
+        "bench", "--lights", "400", "--scenes", "city", "--techniques", &techniques.join(","), "--width", "64", "--height", "64", "--frames", "1",
+        "--spot-fraction", "0.5", "--spot-culling", "both", "--out", out,
+    ]);
+    assert!(run.ok, "bench failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("results.csv"));
+    assert_eq!(csv.header, CSV_COLUMNS, "results.csv header");
+    // (technique, culling) → the "frame" row's light lists, mean and longest list.
+    let mut lists: BTreeMap<(String, String), (f64, f64, f64)> = BTreeMap::new();
+    for row in csv.rows() {
+        assert_eq!(row.get("spot_fraction"), "0.5", "row {:?}", row.cells);
+        assert!(row.num("median_ms").is_finite() && row.num("median_ms") > 0.0, "timed: {:?}", row.cells);
+        if row.get("stage") == "frame" {
+            let key = (row.get("technique").to_string(), row.get("spot_culling").to_string());
+            let previous = lists.insert(key, (row.num("light_lists"), row.num("lights_per_list_mean"), row.num("lights_per_list_max")));
+            assert!(previous.is_none(), "one frame row per technique and culling: {:?}", row.cells);
+        }
+    }
+    let expected: BTreeSet<(String, String)> = techniques.iter().flat_map(|t| [(t.to_string(), "cone".to_string()), (t.to_string(), "sphere".to_string())]).collect();
+    assert_eq!(lists.keys().cloned().collect::<BTreeSet<_>>(), expected, "every technique measured both ways");
+    for t in techniques {
+        let (cone, sphere) = (lists[&(t.to_string(), "cone".to_string())], lists[&(t.to_string(), "sphere".to_string())]);
+        assert!(cone.1 > 0.0, "{t}: the cone lists hold lights: {cone:?}");
+        assert!(sphere.1 >= cone.1 && sphere.2 >= cone.2, "{t}: the range sphere keeps every light the cone keeps: cone {cone:?}, sphere {sphere:?}");
+        if t.starts_with("clustered") {
+            assert!(sphere.1 > cone.1, "{t}: sphere-only culling keeps more lights per list than the cone: cone {cone:?}, sphere {sphere:?}");
+        }
+    }
+    // Separate lines in the plots, separate columns and a spot table in the report.
+    let svg = std::fs::read_to_string(dir.join("frame-vs-lights-city.svg")).expect("frame plot");
+    let stages = std::fs::read_to_string(dir.join("stages-city.svg")).expect("stage plot");
+    for t in techniques {
+        for c in ["cone", "sphere"] {
+            assert!(svg.contains(&format!("{t} ({c})")), "frame plot: no line {t} ({c})");
+        }
+    }
+    assert!(stages.contains("bvh 400 cone") && stages.contains("bvh 400 sphere"), "stage plot: a bar per culling");
+    let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
+    assert!(md.contains("## city (64×64, 50 % of the lights spots)") && md.contains("| clustered-bvh (cone) | clustered-bvh (sphere) |"), "{md}");
+    assert!(md.contains("### Spot lights (50 % of the lights)"), "{md}");
+    for t in techniques {
+        for c in ["cone", "sphere"] {
+            let (_, mean, max) = lists[&(t.to_string(), c.to_string())];
+            let line = format!("| 400 | {t} | {c} | ");
+            let row = md.lines().find(|l| l.starts_with(&line)).unwrap_or_else(|| panic!("no spot table row {line:?} in\n{md}"));
+            let cells: Vec<f64> = row.split('|').skip(5).take(2).map(|c| c.trim().parse().unwrap_or(f64::NAN)).collect();
+            assert!((cells[0] - mean).abs() <= 0.005 + 1e-4 && cells[1] == max, "{row}: lights per list {mean}, max {max} in results.csv");
+        }
+    }
+}
+
+/// `--spot-fraction 0` is the default: the same rows as without the flag (lists, bytes, stages;
+/// only the measured times vary), with share 0 and cone culling; the columns before the spot
+/// columns are those of earlier results.
+#[test]
+fn bench_spot_fraction_zero_changes_nothing() {
+    assert_eq!(
+        CSV_COLUMNS[..16],
+        [
+            "scene", "technique", "width", "height", "lights", "frames", "stage", "queue", "kind", "median_ms", "min_ms", "max_ms", "bytes",
+            "light_lists", "lights_per_list_mean", "lights_per_list_max",
+        ],
+        "earlier readers of results.csv find their columns where they were"
+    );
+    let dir = TempDir::new("bench-spots-zero");
+    let rows = |extra: &[&str], sub: &str| {
+        let out = dir.join(sub);
+        let args = ["bench", "--lights", "200", "--scenes", "city", "--techniques", "clustered-bvh,forward-plus,tiled", "--width", "64", "--height", "36", "--frames", "1"];
+        let run = manylights(args.iter().copied().chain(extra.iter().copied()).chain(["--out", out.to_str().unwrap()]));
+        assert!(run.ok, "bench {extra:?} failed:\n{}", run.stderr);
+        let csv = Csv::read(&out.join("results.csv"));
+        let untimed: Vec<Vec<String>> = csv
+            .rows()
+            .map(|r| CSV_COLUMNS.iter().filter(|c| !c.ends_with("_ms")).map(|c| r.get(c).to_string()).collect())
+            .collect();
+        untimed
+    };
+    let (plain, zero) = (rows(&[], "plain"), rows(&["--spot-fraction", "0"], "zero"));
+    assert!(!plain.is_empty());
+    assert_eq!(plain, zero, "--spot-fraction 0 changes no row");
+    let spot_cells = |r: &Vec<String>| r[r.len() - 2..].to_vec();
+    assert!(zero.iter().all(|r| spot_cells(r) == ["0", "cone"]), "{zero:?}");
 }

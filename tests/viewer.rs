@@ -33,21 +33,51 @@ fn stats(png: &Path) -> serde_json::Value {
 /// Renders what screenshot `png` shows with `manylights render` (its camera, time, technique,
 /// view, light count and size from the screenshot's JSON) and asserts the two within 1/255.
 fn assert_matches_render(png: &Path, dir: &TempDir) {
+    assert_matches_render_of(png, dir, "city", &[]);
+}
+
+/// [`assert_matches_render`] of `scene` with `render`'s `extra` flags.
+fn assert_matches_render_of(png: &Path, dir: &TempDir, scene: &str, extra: &[&str]) {
+    let name = format!("render-{}", png.file_name().unwrap().to_string_lossy());
+    let out = render_like(png, dir, scene, extra, &name);
+    let d = worst(png, &out);
+    assert!(d <= 1, "{} differs from `manylights render --scene {scene} {extra:?}` by {d}/255", png.display());
+}
+
+/// Renders `scene` as screenshot `png` shows it (camera, time, technique, view, light count and
+/// size from its JSON) with `render`'s `extra` flags, into `name` in `dir`.
+fn render_like(png: &Path, dir: &TempDir, scene: &str, extra: &[&str], name: &str) -> std::path::PathBuf {
     let s = stats(png);
     let v = &s["viewer"];
     let (w, h) = (s["resolution"][0].as_u64().unwrap().to_string(), s["resolution"][1].as_u64().unwrap().to_string());
-    let out = dir.join(&format!("render-{}", png.file_name().unwrap().to_string_lossy()));
+    let out = dir.join(name);
     let lights = s["lights"].as_u64().unwrap().to_string();
     let time = v["time"].as_f64().unwrap().to_string();
     let args = [
-        "render", "--scene", "city", "--lights", &lights, "--width", &w, "--height", &h, "--frames", "0",
+        "render", "--scene", scene, "--lights", &lights, "--width", &w, "--height", &h, "--frames", "0",
         "--technique", v["technique"].as_str().unwrap(), "--view", v["view"].as_str().unwrap(),
         "--camera", v["camera"].as_str().unwrap(), "--time", &time, "--out", out.to_str().unwrap(),
     ];
-    let r = manylights(args);
-    assert!(r.ok, "{args:?}:\n{}", r.stderr);
-    let d = worst(png, &out);
-    assert!(d <= 1, "{} differs from `manylights render` by {d}/255 ({args:?})", png.display());
+    let r = manylights(args.iter().chain(extra));
+    assert!(r.ok, "{args:?} {extra:?}:\n{}", r.stderr);
+    out
+}
+
+/// Runs the viewer under Xvfb with `args` and `script` (shots named in it); asserts success.
+fn view(dir: &TempDir, name: &str, args: &[&str], script: &str) -> String {
+    let script_path = dir.write(&format!("{name}.script"), script);
+    let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
+    let out = std::process::Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", env!("CARGO_BIN_EXE_manylights"), "view", "--width", &w, "--height", &h])
+        .args(args)
+        .args(["--script", script_path.to_str().unwrap()])
+        .env("MANYLIGHTS_VALIDATION", "true")
+        .output()
+        .expect("running xvfb-run");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "the viewer failed ({:?}):\n{err}\nscript:\n{script}", out.status.code());
+    assert!(!err.contains("validation") && !err.contains("panicked"), "{err}");
+    err
 }
 
 #[test]
@@ -114,6 +144,51 @@ fn the_viewer_flies_switches_resizes_and_matches_render() {
     assert_eq!(stats(&shot("tiny"))["resolution"], serde_json::json!([1, 1]));
     assert_eq!(stats(&shot("back"))["resolution"], serde_json::json!([SIZE.0, SIZE.1]));
     assert!(worst(&shot("more-lights"), &shot("back")) <= 1, "the frame after 1×1 and back is the frame before");
+}
+
+/// Generated spot lights follow the light count: `+` and `−` regenerate the cones with the
+/// same share and seed, so every screenshot equals `render` with that many lights and the same
+/// `--spot-fraction` (or description); spots listed one by one keep their count, with a note.
+#[test]
+fn the_viewer_regenerates_spot_lights() {
+    let dir = TempDir::new("viewer-spots");
+    let shot = |name: &str| dir.join(&format!("{name}.png"));
+    let p = |name: &str| shot(name).to_str().unwrap().to_owned();
+    // `--spot-fraction`: 64 lights, then 128, then 32.
+    let script = format!("0 key Space\n2 shot {}\n2 key Plus\n4 shot {}\n4 key Minus\n6 key Minus\n8 shot {}\n9 key Escape\n", p("cli-64"), p("cli-128"), p("cli-32"));
+    let err = view(&dir, "cli", &["--scene", "city", "--lights", &LIGHTS.to_string(), "--spot-fraction", "0.5"], &script);
+    assert!(!err.contains("warning"), "no count change was refused:\n{err}");
+    for (name, n) in [("cli-64", LIGHTS), ("cli-128", 2 * LIGHTS), ("cli-32", LIGHTS / 2)] {
+        assert_eq!(stats(&shot(name))["lights"], n, "{name}");
+        assert_matches_render_of(&shot(name), &dir, "city", &["--spot-fraction", "0.5"]);
+    }
+    // The spots are there after the change: the same lights without cones give another image.
+    let points = render_like(&shot("cli-128"), &dir, "city", &[], "points-128.png");
+    assert!(worst(&shot("cli-128"), &points) > 1, "128 lights with spots look like 128 point lights");
+
+    // `[lights] spot_fraction` in a description: `+` regenerates like a description of 128.
+    let description = |n: u32| format!("geometry = \"city\"\n[lights]\ncount = {n}\ndistribution = \"uniform\"\nspot_fraction = 0.5\n");
+    let d64 = dir.write("spots-64.toml", &description(LIGHTS));
+    let d128 = dir.write("spots-128.toml", &description(2 * LIGHTS));
+    let script = format!("0 key Space\n2 key Plus\n4 shot {}\n5 key Escape\n", p("toml-128"));
+    let err = view(&dir, "toml", &["--scene", d64.to_str().unwrap()], &script);
+    assert!(!err.contains("warning"), "no count change was refused:\n{err}");
+    assert_eq!(stats(&shot("toml-128"))["lights"], 2 * LIGHTS);
+    assert_matches_render_of(&shot("toml-128"), &dir, d128.to_str().unwrap(), &[]);
+
+    // A spot light listed in a description keeps its count; the overlay says why.
+    let listed = dir.write(
+        "listed.toml",
+        "geometry = \"city\"\n[[light]]\ntype = \"spot\"\nposition = [0, 12, 0]\nradius = 40\ndirection = [0, -1, 0]\nouter_angle = 40\n",
+    );
+    let script = format!("0 key Space\n2 key Plus\n4 shot {}\n5 key Escape\n", p("listed"));
+    let err = view(&dir, "listed", &["--scene", listed.to_str().unwrap()], &script);
+    let s = stats(&shot("listed"));
+    assert_eq!(s["lights"], 1, "the listed spot light stays alone");
+    let note = "listed one by one";
+    assert!(err.lines().any(|l| l.starts_with("warning: ") && l.contains(note)), "{err}");
+    assert!(s["viewer"]["overlay"].as_array().unwrap().iter().any(|l| l.as_str().unwrap_or("").contains(note)), "{}", s["viewer"]["overlay"]);
+    assert_matches_render_of(&shot("listed"), &dir, listed.to_str().unwrap(), &[]);
 }
 
 /// A malformed script or camera is a one-line error (exit status 2) before any window opens.

@@ -232,7 +232,7 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
 }
 
 /// A value in [0, 1] (`--spot-fraction`).
-fn parse_fraction(s: &str) -> Result<f32, String> {
+pub fn parse_fraction(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
         Ok(v) => Err(format!("{v} is not in [0, 1]")),

@@ -8,13 +8,13 @@
 //! skipped. The configuration's renderer is created once at the first camera; one warm-up frame,
 //! then every camera of the path in order ([`crate::render::Renderer::set_view`]: vertices and
 //! lights move relative to the new eye, NURBS patches are tessellated anew).
-use super::{settings_of, technique_name, BenchArgs};
+use super::{settings_of, spots, technique_name, BenchArgs, Series, SpotCulling};
 use crate::bad_input::bad_input;
 use crate::gpu::Gpu;
 use crate::render::{Renderer, Technique};
 use crate::scene::bookmark::Bookmark;
-use crate::scene::flatten::{flatten, scene_input};
-use crate::scene::{lights, Scene};
+use crate::scene::flatten::flatten;
+use crate::scene::Scene;
 use anyhow::{bail, Context as _, Result};
 use shaders::octahedral::Precision;
 use std::path::Path;
@@ -25,6 +25,10 @@ pub struct FlyRow {
     pub scene: String,
     pub technique: Technique,
     pub lights: usize,
+    /// Share of the lights that are spots, and how they were culled (`--spot-fraction`,
+    /// `--spot-culling`).
+    pub spot_fraction: f32,
+    pub spot_culling: SpotCulling,
     /// Frames timed: the path's cameras.
     pub frames: usize,
     pub median_ms: f64,
@@ -61,9 +65,11 @@ pub fn nearest_rank(v: &[f64], q: f64) -> f64 {
     v[rank - 1]
 }
 
-/// Flies `cameras` through `scene` with technique `t` and `n` lights (module docs).
-pub fn fly(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &BenchArgs, cameras: &[Bookmark]) -> Result<FlyRow> {
-    let l = lights::uniform(scene, n, a.seed).context("generating lights")?;
+/// Flies `cameras` through `scene` with `n` lights and the technique of `series`, which culls
+/// their spots its way (module docs).
+pub fn fly(gpu: &Gpu, scene: &Scene, name: &str, series: Series, n: usize, a: &BenchArgs, cameras: &[Bookmark]) -> Result<FlyRow> {
+    let Series { technique: t, culling } = series;
+    let (l, cones) = spots::generate(scene, n, a)?;
     let flat = flatten(scene, Precision::Oct16)?;
     let s = crate::render::Settings { read_back: false, frames: 0, ..settings_of(a, t) };
     let at = |b: &Bookmark| {
@@ -72,11 +78,11 @@ pub fn fly(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &Ben
         sc
     };
     let first = at(&cameras[0]);
-    let mut r = Renderer::new(gpu, &scene_input(&first, &flat, &l), &s)?;
+    let mut r = Renderer::new(gpu, &spots::input(&first, &flat, &l, &cones, culling), &s)?;
     r.frame(gpu)?;
     let mut ms = Vec::with_capacity(cameras.len());
     for b in cameras {
-        let view = scene_input(&at(b), &flat, &l).view;
+        let view = spots::input(&at(b), &flat, &l, &cones, culling).view;
         r.set_view(gpu, view, &flat.positions, &l)?;
         match r.frame(gpu)?.sample {
             Some(sample) => ms.push(sample.frame_ms),
@@ -88,6 +94,8 @@ pub fn fly(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &Ben
         scene: name.to_string(),
         technique: t,
         lights: n,
+        spot_fraction: a.spot_fraction,
+        spot_culling: culling,
         frames: ms.len(),
         median_ms: nearest_rank(&ms, 0.5),
         p99_ms: nearest_rank(&ms, 0.99),
@@ -97,9 +105,10 @@ pub fn fly(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &Ben
 
 /// `flythrough.csv`.
 pub fn write_csv(rows: &[FlyRow], w: &mut impl std::io::Write) -> std::io::Result<()> {
-    writeln!(w, "scene,technique,lights,frames,median_ms,p99_ms,max_ms")?;
+    writeln!(w, "scene,technique,lights,frames,median_ms,p99_ms,max_ms,spot_fraction,spot_culling")?;
     for r in rows {
-        writeln!(w, "{},{},{},{},{:.6},{:.6},{:.6}", r.scene, technique_name(r.technique), r.lights, r.frames, r.median_ms, r.p99_ms, r.max_ms)?;
+        let (t, culling) = (technique_name(r.technique), r.spot_culling.name());
+        writeln!(w, "{},{t},{},{},{:.6},{:.6},{:.6},{},{culling}", r.scene, r.lights, r.frames, r.median_ms, r.p99_ms, r.max_ms, r.spot_fraction)?;
     }
     Ok(())
 }
@@ -114,7 +123,11 @@ pub fn markdown(rows: &[FlyRow]) -> String {
     let _ = writeln!(md, "## Fly-through (`--camera-path`)\n\nWhole GPU frame over the path, one frame per camera.\n");
     let _ = writeln!(md, "| scene | technique | lights | frames | median ms | 99th percentile ms | max ms |\n|---|---|---|---|---|---|---|");
     for r in rows {
-        let _ = writeln!(md, "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} |", r.scene, technique_name(r.technique), r.lights, r.frames, r.median_ms, r.p99_ms, r.max_ms);
+        let t = match r.spot_fraction > 0.0 {
+            true => format!("{} ({}, {} % spots)", technique_name(r.technique), r.spot_culling.name(), spots::percent(r.spot_fraction)),
+            false => technique_name(r.technique),
+        };
+        let _ = writeln!(md, "| {} | {t} | {} | {} | {:.3} | {:.3} | {:.3} |", r.scene, r.lights, r.frames, r.median_ms, r.p99_ms, r.max_ms);
     }
     md
 }

@@ -3,12 +3,13 @@
 //! Steps:
 //! 0. Warm the GPU up: every technique in turn for [`WARM_UP_SECONDS`], unrecorded (clocks).
 //! 1. For each scene × resolution × light count × technique (the sweep), generate the lights
-//!    (seeded, uniform in the scene), render one warm-up frame and `--frames` timed frames, and
-//!    keep each pass's GPU-timestamp median, min and max, the bytes of every buffer and the
-//!    lights per pixel ([`run_config`]). A configuration that would take minutes per frame
-//!    (brute force at 1M lights, per-cluster naive tests at 10M) is skipped with a note
-//!    ([`skip_reason`]); one the device refuses (memory, lavapipe's loop limit) is recorded with
-//!    the refusal — neither is ever timed out or dropped silently.
+//!    (seeded, uniform in the scene; `--spot-fraction` of them spots, culled by cone, by range
+//!    sphere or each way in turn: `--spot-culling`, `spots.rs`), render one warm-up frame and
+//!    `--frames` timed frames, and keep each pass's GPU-timestamp median, min and max, the
+//!    bytes of every buffer and the lights per pixel ([`run_config`]). A configuration that
+//!    would take minutes per frame (brute force at 1M lights, per-cluster naive tests at 10M)
+//!    is skipped with a note ([`skip_reason`]); one the device refuses (memory, lavapipe's loop
+//!    limit) is recorded with the refusal — neither is ever timed out or dropped silently.
 //! 2. Write `results.csv` (one row per configuration and stage, [`CSV_COLUMNS`]).
 //! 3. Draw the plots (`plots.rs`): frame ms vs lights (log–log, one line per technique: Karas'
 //!    Fig. 8) and stacked per-stage ms of the clustered techniques (Karas' Fig. 7).
@@ -24,12 +25,13 @@ pub mod accuracy;
 pub mod flythrough;
 pub mod plots;
 pub mod report;
+pub mod spots;
 
 use crate::gpu::Gpu;
 use crate::render::{self, Settings, Technique};
-use crate::scene::flatten::{flatten, scene_input};
+use crate::scene::flatten::flatten;
 use crate::vk::Queue;
-use crate::scene::{lights, Scene};
+use crate::scene::Scene;
 use anyhow::{bail, ensure, Context as _, Result};
 use clap::{Args, ValueEnum};
 use shaders::layout::View;
@@ -37,10 +39,12 @@ use shaders::octahedral::Precision;
 use std::io::Write as _;
 use std::path::PathBuf;
 
+pub use spots::{present_series, with_spots, Series, SpotCulling};
+
 /// Columns of `results.csv`.
-pub const CSV_COLUMNS: [&str; 16] = [
+pub const CSV_COLUMNS: [&str; 18] = [
     "scene", "technique", "width", "height", "lights", "frames", "stage", "queue", "kind", "median_ms", "min_ms", "max_ms", "bytes",
-    "light_lists", "lights_per_list_mean", "lights_per_list_max",
+    "light_lists", "lights_per_list_mean", "lights_per_list_max", "spot_fraction", "spot_culling",
 ];
 
 /// `queue` of a pass row: the queue it ran on (the "frame" and "compute" rows: `all`, both).
@@ -80,6 +84,15 @@ pub struct BenchArgs {
     pub tile_size: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Share of the generated lights of every sweep point that are spot lights, in [0, 1]
+    /// (`lights::spot_cones` with `--seed`, as `render --spot-fraction`).
+    #[arg(long, default_value_t = 0.0, value_parser = crate::render_cmd::parse_fraction, allow_negative_numbers = true)]
+    pub spot_fraction: f32,
+    /// How the techniques cull spot lights: `cone` (cone after the range sphere), `sphere` (range
+    /// sphere only), or `both` (each technique measured both ways). Needs `--spot-fraction` > 0
+    /// for `sphere` and `both`.
+    #[arg(long, value_enum, default_value_t = SpotCulling::Cone)]
+    pub spot_culling: SpotCulling,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
@@ -145,6 +158,11 @@ pub struct Row {
     /// Mean and longest list (false positives included: what shading evaluates per list).
     pub lights_per_list_mean: f64,
     pub lights_per_list_max: u32,
+    /// Share of the generated lights that are spots (`--spot-fraction`).
+    pub spot_fraction: f32,
+    /// How the spots were culled: [`SpotCulling::Cone`] or [`SpotCulling::Sphere`] (cone
+    /// without spots: there is nothing to cull by cone).
+    pub spot_culling: SpotCulling,
 }
 
 /// A configuration that was not measured, and why.
@@ -153,6 +171,8 @@ pub struct Skip {
     pub scene: String,
     pub technique: Technique,
     pub lights: usize,
+    /// The spot culling of the configuration (`None`: skipped whatever the culling).
+    pub culling: Option<SpotCulling>,
     pub why: String,
 }
 
@@ -235,13 +255,14 @@ pub const CLUSTER_PAIRS_GPU: u64 = 20_000_000_000;
 /// The same on a CPU driver.
 pub const CLUSTER_PAIRS_CPU: u64 = 100_000_000;
 
-/// Renders one configuration and turns its passes into rows.
-pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
-    let l = lights::uniform(scene, n, a.seed).context("generating lights")?;
+/// Renders one configuration (`n` generated lights, `--spot-fraction` of them spots culled the
+/// `culling` way) and turns its passes into rows.
+pub fn run_config(gpu: &Gpu, scene: &Scene, name: &str, t: Technique, n: usize, culling: SpotCulling, a: &BenchArgs) -> Result<Vec<Row>> {
+    let (l, cones) = spots::generate(scene, n, a)?;
     let flat = flatten(scene, Precision::Oct16)?;
     let s = settings_of(a, t);
-    let frame = render::render(gpu, &scene_input(scene, &flat, &l), &s)?;
-    run_rows(frame, name, t, n, a)
+    let frame = render::render(gpu, &spots::input(scene, &flat, &l, &cones, culling), &s)?;
+    run_rows(frame, name, t, n, culling, a)
 }
 
 /// The settings of a configuration of the sweep.
@@ -265,7 +286,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
 }
 
 /// The rows of a configuration's measured frame.
-fn run_rows(frame: render::Frame, name: &str, t: Technique, n: usize, a: &BenchArgs) -> Result<Vec<Row>> {
+fn run_rows(frame: render::Frame, name: &str, t: Technique, n: usize, culling: SpotCulling, a: &BenchArgs) -> Result<Vec<Row>> {
     ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");
     let bytes: u64 = frame.buffers.iter().map(|b| b.1).sum();
     let light_lists = match t {
@@ -298,6 +319,8 @@ fn run_rows(frame: render::Frame, name: &str, t: Technique, n: usize, a: &BenchA
         light_lists,
         lights_per_list_mean,
         lights_per_list_max,
+        spot_fraction: a.spot_fraction,
+        spot_culling: culling,
     };
     let mut rows: Vec<Row> = frame
         .timings
@@ -351,7 +374,7 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
         let start = std::time::Instant::now();
         'warm: while !runnable.is_empty() && start.elapsed().as_secs_f64() < warm_up_seconds {
             for &t in &runnable {
-                if run_config(gpu, &scene, name, t, n, &warm).is_err() {
+                if run_config(gpu, &scene, name, t, n, a.spot_culling.modes()[0], &warm).is_err() {
                     break 'warm; // the sweep records the error where it belongs
                 }
             }
@@ -364,16 +387,20 @@ pub fn sweep(gpu: &Gpu, a: &BenchArgs, command: String) -> Result<Results> {
                 bar.set_message(format!("{name} {t:?} {n} lights"));
                 let pixels = a.width as u64 * a.height as u64;
                 if let Some(why) = skip_reason(t, n, pixels, cpu_driver, scene.has_transparency()) {
-                    out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why });
-                } else {
-                    match run_config(gpu, &scene, name, t, n, a) {
+                    out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, culling: None, why });
+                    bar.inc(1);
+                    continue;
+                }
+                for &culling in a.spot_culling.modes() {
+                    let skip = |why: String| Skip { scene: name.clone(), technique: t, lights: n, culling: Some(culling), why };
+                    match run_config(gpu, &scene, name, t, n, culling, a) {
                         Ok(rows) => out.rows.extend(rows),
-                        Err(e) => out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why: format!("{e:#}") }),
+                        Err(e) => out.skips.push(skip(format!("{e:#}"))),
                     }
                     if let Some(cameras) = &path {
-                        match flythrough::fly(gpu, &scene, name, t, n, a, cameras) {
+                        match flythrough::fly(gpu, &scene, name, Series { technique: t, culling }, n, a, cameras) {
                             Ok(row) => out.flythrough.push(row),
-                            Err(e) => out.skips.push(Skip { scene: name.clone(), technique: t, lights: n, why: format!("fly-through: {e:#}") }),
+                            Err(e) => out.skips.push(skip(format!("fly-through: {e:#}"))),
                         }
                     }
                 }
@@ -391,7 +418,7 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
     for x in &r.rows {
         writeln!(
             w,
-            "{},{},{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.4},{}",
+            "{},{},{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{},{},{:.4},{},{},{}",
             csv_field(&x.scene),
             technique_name(x.technique),
             x.width,
@@ -407,7 +434,9 @@ pub fn write_csv(r: &Results, w: &mut impl std::io::Write) -> std::io::Result<()
             x.bytes,
             x.light_lists,
             x.lights_per_list_mean,
-            x.lights_per_list_max
+            x.lights_per_list_max,
+            x.spot_fraction,
+            x.spot_culling.name()
         )?;
     }
     Ok(())
@@ -440,6 +469,7 @@ fn command_line() -> String {
 
 /// `manylights bench`: sweep, CSV, plots, markdown.
 pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
+    spots::check_args(a)?;
     // The accuracy study's reference reads float32 normals: the widest G-buffer.
     let widest = if a.study.is_some() { Precision::F32 } else { Precision::Oct16 };
     crate::preflight::check_frame(&gpu.ctx.info, a.width, a.height, a.tile_size, widest)?;
@@ -472,7 +502,8 @@ pub fn run(gpu: &Gpu, a: &BenchArgs) -> Result<()> {
         flythrough::write_csv(&r.flythrough, &mut f).and_then(|_| f.flush()).with_context(|| format!("writing {}", fly.display()))?;
     }
     for s in &r.skips {
-        eprintln!("skipped {} {} {} lights: {}", s.scene, technique_name(s.technique), s.lights, s.why);
+        let culling = s.culling.filter(|_| a.spot_fraction > 0.0).map(|c| format!(" ({} culling)", c.name())).unwrap_or_default();
+        eprintln!("skipped {} {} {} lights{culling}: {}", s.scene, technique_name(s.technique), s.lights, s.why);
     }
     eprintln!("wrote {}, {} and {} plot(s) in {}", csv.display(), md.display(), plots.len(), a.out.display());
     Ok(())

@@ -1,9 +1,11 @@
 //! SVG plots of a sweep (plotters' SVG backend: no system fonts needed, viewable on GitHub).
 //! * `frame-vs-lights-<scene>.svg` / `compute-vs-lights-<scene>.svg` — ms vs lights, log–log,
-//!   one line per technique (Karas' Fig. 8);
-//! * `stages-<scene>.svg` — per-stage ms stacked, one bar per clustered technique and light
-//!   count (Karas' Fig. 7).
-use super::{technique_name, Results, Row};
+//!   one line per technique (Karas' Fig. 8); with spot lights one per technique and spot
+//!   culling (`clustered-bvh (cone)`, `clustered-bvh (sphere)`: `--spot-culling both` draws
+//!   both, never merged);
+//! * `stages-<scene>.svg` — per-stage ms stacked, one bar per clustered technique (and spot
+//!   culling) and light count (Karas' Fig. 7).
+use super::{technique_name, with_spots, Results, Row, Series};
 use anyhow::Result;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -61,14 +63,15 @@ fn lines(r: &Results, scene: &str, stage: &str, path: &Path) -> Result<bool> {
         .y_label_area_size(70)
         .build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), (y0 * 0.7..y1 * 1.4).log_scale())?;
     chart.configure_mesh().x_desc("lights").y_desc(format!("{stage} ms (median)")).draw()?;
-    let techniques: Vec<super::Technique> = super::present_techniques(&rows);
-    for (i, t) in techniques.iter().enumerate() {
+    let series = super::present_series(&rows);
+    let spots = with_spots(&rows);
+    for (i, t) in series.iter().enumerate() {
         let colour = Palette99::pick(i).mix(1.0);
-        let mut pts: Vec<(f64, f64)> = rows.iter().filter(|x| x.technique == *t).map(|x| (x.lights as f64, x.median_ms)).collect();
+        let mut pts: Vec<(f64, f64)> = rows.iter().filter(|x| x.series() == *t).map(|x| (x.lights as f64, x.median_ms)).collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         chart
             .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))?
-            .label(technique_name(*t))
+            .label(t.name(spots))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
         chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, colour.filled())))?;
     }
@@ -81,15 +84,15 @@ fn lines(r: &Results, scene: &str, stage: &str, path: &Path) -> Result<bool> {
 fn stacked(r: &Results, scene: &str, path: &Path) -> Result<bool> {
     let clustered = |x: &&Row| x.scene == scene && technique_name(x.technique).starts_with("clustered");
     let rows: Vec<&Row> = r.rows.iter().filter(clustered).collect();
-    // Bars: (technique, lights) in sweep order; stages in first-seen order.
-    let mut bars: Vec<(super::Technique, usize)> = Vec::new();
+    // Bars: (technique and spot culling, lights) in sweep order; stages in first-seen order.
+    let mut bars: Vec<(Series, usize)> = Vec::new();
     let mut stages: Vec<String> = Vec::new();
     for x in &rows {
         if x.stage == "frame" || x.stage == "compute" {
             continue;
         }
-        if !bars.contains(&(x.technique, x.lights)) {
-            bars.push((x.technique, x.lights));
+        if !bars.contains(&(x.series(), x.lights)) {
+            bars.push((x.series(), x.lights));
         }
         if !stages.contains(&x.stage) {
             stages.push(x.stage.clone());
@@ -98,10 +101,9 @@ fn stacked(r: &Results, scene: &str, path: &Path) -> Result<bool> {
     if bars.is_empty() {
         return Ok(false);
     }
-    bars.sort_by_key(|b| (technique_name(b.0), b.1));
-    let stage_ms = |b: &(super::Technique, usize), s: &str| {
-        rows.iter().find(|x| x.technique == b.0 && x.lights == b.1 && x.stage == s).map(|x| x.median_ms).unwrap_or(0.0)
-    };
+    bars.sort_by_key(|b| (technique_name(b.0.technique), b.1, b.0.culling.name()));
+    let stage_ms = |b: &(Series, usize), s: &str| rows.iter().find(|x| x.series() == b.0 && x.lights == b.1 && x.stage == s).map(|x| x.median_ms).unwrap_or(0.0);
+    let spots = with_spots(&rows);
     let top = bars.iter().map(|b| stages.iter().map(|s| stage_ms(b, s)).sum::<f64>()).fold(0.0, f64::max);
     let root = SVGBackend::new(path, (SIZE.0.max(60 * bars.len() as u32 + 200), SIZE.1)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -111,7 +113,13 @@ fn stacked(r: &Results, scene: &str, path: &Path) -> Result<bool> {
         .x_label_area_size(90)
         .y_label_area_size(70)
         .build_cartesian_2d(0f64..bars.len() as f64, 0f64..top * 1.15)?;
-    let labels: Vec<String> = bars.iter().map(|b| format!("{} {}", technique_name(b.0).trim_start_matches("clustered-"), short(b.1))).collect();
+    let labels: Vec<String> = bars
+        .iter()
+        .map(|b| {
+            let culling = if spots { format!(" {}", b.0.culling.name()) } else { String::new() };
+            format!("{} {}{culling}", technique_name(b.0.technique).trim_start_matches("clustered-"), short(b.1))
+        })
+        .collect();
     chart
         .configure_mesh()
         .disable_x_mesh()

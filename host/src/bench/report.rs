@@ -1,6 +1,6 @@
 //! `results.md`: generated from the sweep's rows (the same numbers as `results.csv`).
 use super::plots::short;
-use super::{present_techniques, technique_name, Results, Row, Technique};
+use super::{present_series, technique_name, with_spots, Results, Row, Series};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -12,8 +12,8 @@ fn speedup_lights(rows: &[&Row]) -> Option<usize> {
     counts.into_iter().min_by_key(|&n| (n as f64 / 10_000.0).ln().abs().mul_add(1e6, 0.0) as u64)
 }
 
-fn ms(rows: &[&Row], t: Technique, n: usize, stage: &str) -> Option<f64> {
-    rows.iter().find(|r| r.technique == t && r.lights == n && r.stage == stage).map(|r| r.median_ms)
+fn ms(rows: &[&Row], t: Series, n: usize, stage: &str) -> Option<f64> {
+    rows.iter().find(|r| r.series() == t && r.lights == n && r.stage == stage).map(|r| r.median_ms)
 }
 
 /// The markdown report.
@@ -42,15 +42,19 @@ pub fn markdown(r: &Results, plots: &[PathBuf]) -> String {
     }
     for scene in scenes {
         let rows: Vec<&Row> = r.rows.iter().filter(|x| x.scene == scene).collect();
-        let techniques = present_techniques(&rows);
+        // Columns: techniques, each once per spot culling measured (`--spot-culling both`).
+        let techniques = present_series(&rows);
+        let spots = with_spots(&rows);
+        let name = |t: &Series| t.name(spots);
         let mut lights: Vec<usize> = rows.iter().map(|x| x.lights).collect();
         lights.sort_unstable();
         lights.dedup();
-        let _ = writeln!(md, "## {scene} ({}×{})\n", rows[0].width, rows[0].height);
+        let share = if spots { format!(", {} % of the lights spots", super::spots::percent(rows[0].spot_fraction)) } else { String::new() };
+        let _ = writeln!(md, "## {scene} ({}×{}{share})\n", rows[0].width, rows[0].height);
         let _ = writeln!(md, "### Frame GPU ms (compute ms)\n");
         let _ = write!(md, "| lights |");
         for t in &techniques {
-            let _ = write!(md, " {} |", technique_name(*t));
+            let _ = write!(md, " {} |", name(t));
         }
         let _ = writeln!(md, "\n|---|{}", "---|".repeat(techniques.len()));
         for &n in &lights {
@@ -71,11 +75,11 @@ pub fn markdown(r: &Results, plots: &[PathBuf]) -> String {
             let _ = writeln!(md, "\n### Speed-up at {} lights (baseline frame ms / technique frame ms; compute in parentheses)\n", short(n));
             let _ = write!(md, "| technique \\ baseline |");
             for b in &techniques {
-                let _ = write!(md, " {} |", technique_name(*b));
+                let _ = write!(md, " {} |", name(b));
             }
             let _ = writeln!(md, "\n|---|{}", "---|".repeat(techniques.len()));
             for &t in &techniques {
-                let _ = write!(md, "| {} |", technique_name(t));
+                let _ = write!(md, "| {} |", name(&t));
                 for &b in &techniques {
                     let cell = match (ms(&rows, b, n, "frame"), ms(&rows, t, n, "frame"), ms(&rows, b, n, "compute"), ms(&rows, t, n, "compute")) {
                         (Some(bf), Some(tf), Some(bc), Some(tc)) => format!("{:.2}× ({:.2}×)", bf / tf, bc / tc),
@@ -93,19 +97,21 @@ pub fn markdown(r: &Results, plots: &[PathBuf]) -> String {
                 .filter_map(|&t| ms(&rows, t, n, "frame").map(|f| (t, f)))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((t, f)) = best {
-                let _ = writeln!(md, "\n### Stages of the fastest technique at {} lights: {} ({f:.3} ms)\n", short(n), technique_name(t));
+                let _ = writeln!(md, "\n### Stages of the fastest technique at {} lights: {} ({f:.3} ms)\n", short(n), name(&t));
                 let _ = writeln!(md, "| stage | median ms | min ms | max ms |\n|---|---|---|---|");
-                for x in rows.iter().filter(|x| x.technique == t && x.lights == n) {
+                for x in rows.iter().filter(|x| x.series() == t && x.lights == n) {
                     let _ = writeln!(md, "| {} | {:.3} | {:.3} | {:.3} |", x.stage, x.median_ms, x.min_ms, x.max_ms);
                 }
             }
         }
+        md += &super::spots::markdown(&rows);
         let _ = writeln!(md);
     }
     if !r.skips.is_empty() {
         let _ = writeln!(md, "## Not measured\n");
         for s in &r.skips {
-            let _ = writeln!(md, "- {} · {} · {} lights: {}", s.scene, technique_name(s.technique), short(s.lights), s.why);
+            let culling = s.culling.filter(|_| r.rows.iter().any(|x| x.spot_fraction > 0.0)).map(|c| format!(" · {} culling", c.name())).unwrap_or_default();
+            let _ = writeln!(md, "- {} · {} · {} lights{culling}: {}", s.scene, technique_name(s.technique), short(s.lights), s.why);
         }
         let _ = writeln!(md);
     }

@@ -275,18 +275,24 @@ impl Renderer {
         }
         let aspect = r.settings.width as f32 / r.settings.height as f32;
         r.camera.write(&[gbuffer::raster_camera(view.rotation(), r.fov_y_radians, aspect, r.near)])?;
-        self.set_lights(gpu, world_lights)
+        let spots = r.spots.clone();
+        self.set_lights(gpu, world_lights, &spots)
     }
 
-    /// Replaces the lights (world space, seen from the current view). A different count
-    /// reallocates the light buffer and creates the technique anew; on an error the renderer
-    /// keeps its lights and technique.
-    pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight]) -> Result<()> {
+    /// Replaces the lights (world space, seen from the current view) and their cones (`spots`:
+    /// one per light, `None` for a point light, or empty without spot lights). A different
+    /// count, or spots where there were none (or none where there were), reallocates the light
+    /// buffer and creates the technique anew; on an error the renderer keeps its lights and
+    /// technique.
+    pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight], spots: &[Option<light_types::Spot>]) -> Result<()> {
         let lights_view = lights_to_view(&self.res.view, world_lights)?;
-        let records = light_records(&self.res.view, &lights_view, &self.res.spots, &self.res.directional)?;
-        if lights_view.len() == self.res.lights_view.len() {
+        let records = light_records(&self.res.view, &lights_view, spots, &self.res.directional)?;
+        let effects = (self.res.params.effects & !shaders::light_types::EFFECT_SPOT) | light_types::light_effects(spots, &self.res.directional)?;
+        if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;
             self.res.lights_view = lights_view;
+            self.res.spots.clear();
+            self.res.spots.extend_from_slice(spots);
             self.tech.lights_moved(&self.res.inputs());
             return Ok(());
         }
@@ -295,10 +301,14 @@ impl Renderer {
         let old_lights = std::mem::replace(&mut self.res.lights, lights);
         let old_view = std::mem::replace(&mut self.res.lights_view, lights_view);
         let old_count = std::mem::replace(&mut self.res.params.num_lights, world_lights.len() as u32);
+        let old_effects = std::mem::replace(&mut self.res.params.effects, effects);
+        let old_spots = std::mem::replace(&mut self.res.spots, spots.to_vec());
         if let Err(e) = self.replace_technique(gpu) {
             self.res.lights = old_lights;
             self.res.lights_view = old_view;
             self.res.params.num_lights = old_count;
+            self.res.params.effects = old_effects;
+            self.res.spots = old_spots;
             return Err(e);
         }
         Ok(())

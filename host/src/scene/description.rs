@@ -555,6 +555,9 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
             light.intensity = l.intensity.unwrap_or(light.intensity);
         }
         let cones = lights::spot_cones(generated.len(), l.spot_fraction.unwrap_or(0.0), seed).map_err(|e| at(anyhow!("[lights]: {e}")))?;
+        // Every punctual light generated with spots: another count gets its cones alike.
+        let listed = !scene.lights.is_empty() || d.light.iter().any(|l| l.kind != LightType::Directional);
+        scene.spot_share = l.spot_fraction.filter(|&f| f > 0.0 && !listed).map(|fraction| lights::SpotShare { fraction, seed });
         // After the geometry's own lights (a glTF file's).
         let n = generated.len();
         scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));

@@ -221,6 +221,22 @@ pub fn on_surfaces(scene: &Scene, n: usize, seed: u64, offset: f32) -> Result<Ve
 pub const SPOT_OUTER_DEGREES: (f32, f32) = (20.0, 60.0);
 pub const SPOT_INNER_FRACTION: (f32, f32) = (0.3, 0.9);
 
+/// How generated lights got their spots: the share that are spots and the seed of the cones
+/// ([`spot_cones`]), kept so that another count of lights gets its cones alike (the viewer's
+/// `+` / `−`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotShare {
+    pub fraction: f32,
+    pub seed: u64,
+}
+
+impl SpotShare {
+    /// The cones of `n` lights generated with this share ([`spot_cones`]).
+    pub fn cones(&self, n: usize) -> Result<Vec<Option<Spot>>> {
+        spot_cones(n, self.fraction, self.seed)
+    }
+}
+
 /// Cones for `n` generated lights: each light is a spot with probability `fraction` (seeded, its
 /// own stream: the lights themselves do not change with the fraction), pointing mostly down
 /// (`−y` plus a random tilt up to ≈ 45°), half-angles [`SPOT_OUTER_DEGREES`]. Empty for

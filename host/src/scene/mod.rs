@@ -241,6 +241,9 @@ pub struct Scene {
     pub lights: Vec<PointLight>,
     /// Per light of `lights`, its cone if it is a spot light; empty when none is.
     pub spots: Vec<Option<Spot>>,
+    /// Where every light of `lights` was generated with a share of spots (`[lights]
+    /// spot_fraction`), that share and its seed; `None` where lights are listed one by one.
+    pub spot_share: Option<lights::SpotShare>,
     /// Directional lights (world space).
     pub directional: Vec<Directional>,
     pub effects: Effects,
@@ -313,7 +316,7 @@ impl Scene {
     pub fn new(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, textures: Vec<Texture>, camera: Camera) -> Self {
         let bounds = bounds_of(&meshes);
         let effects = Effects::from_materials(&materials);
-        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], spots: vec![], directional: vec![], effects, bounds, warnings: vec![] }
+        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], spots: vec![], spot_share: None, directional: vec![], effects, bounds, warnings: vec![] }
     }
 
     /// Adds NURBS patches and grows the bounds by their control points.

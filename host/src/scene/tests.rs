@@ -417,3 +417,22 @@ fn descriptions_with_light_types() {
     let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"uniform\"\nspot_fraction = 1.5\n");
     assert!(e.contains("lights.spot_fraction = 1.5 must be in [0, 1]"), "{e}");
 }
+
+/// A description whose punctual lights are all generated with `[lights] spot_fraction` keeps
+/// its share and seed (another count gets its cones alike: the viewer's + / −); lights listed
+/// one by one, or no spots, leave none.
+#[test]
+fn descriptions_keep_the_spot_share_of_generated_lights() {
+    let dir = TempDir::new("desc-share");
+    let generated = "geometry = \"city\"\n[lights]\ncount = 50\ndistribution = \"uniform\"\nseed = 7\nspot_fraction = 0.5\n";
+    let load = |name: &str, text: &str| Scene::load(dir.write(name, text).to_str().unwrap(), &assets()).unwrap();
+    let s = load("share.toml", generated);
+    let share = s.spot_share.expect("a spot share");
+    assert_eq!((share.fraction, share.seed), (0.5, 7));
+    assert_eq!(share.cones(s.lights.len()).unwrap(), s.spots, "the share gives the scene's own cones back");
+    let directional = format!("{generated}[[light]]\ntype = \"directional\"\ndirection = [0, -1, 0]\n");
+    assert_eq!(load("dir.toml", &directional).spot_share, Some(share), "a directional light is no punctual light");
+    let listed = format!("{generated}[[light]]\nposition = [0, 3, 0]\nradius = 5\n");
+    assert_eq!(load("listed.toml", &listed).spot_share, None, "a listed light");
+    assert_eq!(load("points.toml", &generated.replace("spot_fraction = 0.5\n", "")).spot_share, None, "no spots");
+}

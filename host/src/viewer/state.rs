@@ -28,8 +28,12 @@ pub struct Viewer {
     /// The scene's own camera: near, far and field of view of every frame.
     scene_camera: Camera,
     flat: Flattened,
-    /// Lights before the animation (generated with `seed`, or the description's).
+    /// Lights before the animation (generated with `seed`, or the description's); their cones
+    /// are `scene.spots`.
     base_lights: Vec<PointLight>,
+    /// The share of spots the lights were generated with (`--spot-fraction`, `[lights]
+    /// spot_fraction`): a new light count gets its cones alike. `None`: no generated spots.
+    spot_share: Option<lights::SpotShare>,
     /// The lights of the current frame: `lights::animate(base_lights, time)`.
     lights: Vec<PointLight>,
     seed: u64,
@@ -55,19 +59,30 @@ impl Viewer {
         for w in &scene.warnings {
             eprintln!("warning: {w}");
         }
-        let base_lights = match scene.lights.is_empty() {
+        // The lights as `render` makes them (with their cones in `scene.spots`).
+        let spot_share = match scene.lights.is_empty() {
             true => {
                 if a.lights == 0 {
                     crate::bail_input!("--lights 0: nothing to light (give at least 1, or lights in a scene description)");
                 }
-                lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?
+                let generated =
+                    lights::uniform(&scene, a.lights as usize, a.seed).with_context(|| format!("generating --lights {} in scene {:?}", a.lights, a.scene)).map_err(bad_input)?;
+                let share = lights::SpotShare { fraction: a.spot_fraction, seed: a.seed };
+                let cones = share.cones(generated.len()).map_err(bad_input)?;
+                let n = generated.len();
+                scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
+                (a.spot_fraction > 0.0).then_some(share)
             }
-            false => std::mem::take(&mut scene.lights),
+            false if a.spot_fraction > 0.0 => {
+                crate::bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)")
+            }
+            false => scene.spot_share,
         };
         let scene_camera = scene.camera;
         let at = a.camera.unwrap_or_else(|| Bookmark { fov_y_degrees: None, ..Bookmark::of_camera(&scene_camera) });
         scene.camera = at.apply(&scene_camera);
         scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
+        let base_lights = std::mem::take(&mut scene.lights);
         let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
         let (lo, hi) = scene.bounds;
         let speed = ((hi - lo).length() / 30.0).max(0.1);
@@ -79,6 +94,7 @@ impl Viewer {
             scene_camera,
             flat,
             base_lights,
+            spot_share,
             lights,
             seed: a.seed,
             settings,
@@ -174,16 +190,25 @@ impl Viewer {
         Ok(())
     }
 
-    /// `n` lights generated anew with the same seed (a description's own lights are replaced).
+    /// `n` lights generated anew with the same seed (a description's own lights are replaced),
+    /// generated spots with the same share and seed ([`lights::SpotShare`]). Spot lights listed
+    /// one by one (`[[light]]`, glTF) keep their count.
     fn set_light_count(&mut self, gpu: &Gpu, n: usize) -> Result<()> {
         let what = format!("{n} lights");
+        let spots = match self.spot_share {
+            Some(share) => share.cones(n).with_context(|| format!("generating the spot cones of {what}"))?,
+            None if self.scene.spots.iter().any(Option::is_some) => anyhow::bail!(
+                "{what}: this scene's spot lights are listed one by one (a description's [[light]], glTF), so their count stays; generated spots (--spot-fraction, [lights] spot_fraction) follow a new count"
+            ),
+            None => vec![],
+        };
         preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.tile_size, n as u64, &what)?;
         let base = lights::uniform(&self.scene, n, self.seed).with_context(|| format!("generating {what}"))?;
         let animated = lights::animate(&base, self.time);
         if let Some(r) = self.renderer.as_mut() {
-            r.set_lights(gpu, &animated)?;
+            r.set_lights(gpu, &animated, &spots)?;
         }
-        (self.base_lights, self.lights) = (base, animated);
+        (self.base_lights, self.lights, self.scene.spots) = (base, animated, spots);
         self.text.reset();
         Ok(())
     }
@@ -200,7 +225,7 @@ impl Viewer {
             let view = scene_input(&self.scene, &self.flat, &self.lights).view;
             r.set_view(gpu, view, &self.flat.positions, &self.lights)?;
         } else if lights_moved {
-            r.set_lights(gpu, &self.lights)?;
+            r.set_lights(gpu, &self.lights, &self.scene.spots)?;
         }
         self.camera_moved = false;
         let times = r.frame(gpu)?;
