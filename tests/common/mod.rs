@@ -7,6 +7,7 @@
 //! - [`compare`]: every technique against a reference, a CPU shading of a read-back frame;
 //! - [`scenes`]: the hard light cases and the geometry the built-in scenes lack;
 //! - [`csv`]: CSV files read by column name;
+//! - [`gltf`]: small glTF documents built in code;
 //! - [`cli`]: running the binary, one-line errors;
 //! - [`spirv`]: entry points of a SPIR-V module;
 //! - [`temp`]: per-test temporary directories.
@@ -15,6 +16,7 @@ pub mod assets;
 pub mod cli;
 pub mod compare;
 pub mod csv;
+pub mod gltf;
 pub mod pixels;
 pub mod render;
 pub mod scenes;

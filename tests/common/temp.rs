@@ -24,6 +24,13 @@ impl TempDir {
         self.0.join(name)
     }
 
+    /// Writes `bytes` to `name` and returns its path.
+    pub fn write_bytes(&self, name: &str, bytes: &[u8]) -> PathBuf {
+        let p = self.0.join(name);
+        std::fs::write(&p, bytes).unwrap_or_else(|e| panic!("writing {}: {e}", p.display()));
+        p
+    }
+
     /// Writes `text` to `name` (creating parent directories) and returns its path.
     pub fn write(&self, name: &str, text: &str) -> PathBuf {
         let p = self.0.join(name);

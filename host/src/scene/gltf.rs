@@ -10,9 +10,10 @@
 //!    each triangle's winding so front faces stay counter-clockwise.
 //! 2. **Materials**: base-colour factor (linear RGB) → albedo, its texture → the albedo texture;
 //!    `metallicFactor` → specular weight, `roughnessFactor` → roughness (at least 0.01); alpha
-//!    mode `OPAQUE` → opacity 1, `MASK` → the alpha-test path (the base colour's alpha as the
-//!    coverage mask, cut at 0.5; another `alphaCutoff` is read as 0.5 with a warning), `BLEND` →
-//!    opacity = the base colour factor's alpha. A primitive without a material gets glTF's
+//!    mode `OPAQUE` → opacity 1, `MASK` → the alpha-test path (coverage = the base colour
+//!    texture's alpha × the factor's alpha, kept where it reaches `alphaCutoff`, default 0.5;
+//!    without a texture, the factor's alpha alone), `BLEND` → opacity = the base colour factor's
+//!    alpha. A primitive without a material gets glTF's
 //!    default (white, opaque).
 //! 3. **Camera**: the first node with a perspective camera: position and −z / +y of its world
 //!    transform, `yfov`, `znear`, `zfar` (or, infinite, 1000 × `znear` and at least past the
@@ -24,8 +25,18 @@
 //!    same point light plus its cone ([`Spot`]): the node's −z axis, `innerConeAngle` and
 //!    `outerConeAngle`; a directional light ([`Directional`]) the node's −z axis, colour and
 //!    intensity. A cone out of glTF's range is an error naming the light.
-//! 5. **Ignored with one warning line each**: skins, morph targets, animations, non-triangle
-//!    primitives, orthographic cameras, extensions the importer does not know.
+//! 5. **Ignored with one warning line each** (per file and feature): skins, morph targets,
+//!    animations, orthographic cameras, extensions the importer does not know, images that do
+//!    not decode; non-triangle primitives (one line each). Primitives compressed with
+//!    `KHR_draco_mesh_compression` (allowed in `extensionsRequired`) are skipped with one line;
+//!    a file left with no triangle mesh is an error.
+//! 6. **Errors** are one line naming the file and what is wrong: not JSON, JSON that is not
+//!    glTF, a broken `.glb` container, the `gltf` crate's validation (index out of range, …:
+//!    its first problem and how many more), a buffer that cannot be read or is shorter than its
+//!    `byteLength`, a buffer view past its buffer, an accessor past its view, attributes of the
+//!    wrong type, vertex indices past the vertices, cones out of range. They are checked before
+//!    the crate reads the data (it would index past them); a panic it raises anyway becomes an
+//!    error too.
 use super::{face_averaged_normals, Camera, Directional, Material, Mesh, Scene, Spot, Texture, TextureKind};
 use anyhow::{anyhow, bail, Result};
 use glam::{Mat3, Mat4, Vec3};
@@ -34,7 +45,7 @@ use std::path::{Path, PathBuf};
 
 /// Falloff level below which a light without a range no longer counts (see step 4).
 pub const RANGE_THRESHOLD: f32 = 1.0 / 256.0;
-/// glTF's default alpha cutoff, and the one the alpha-test path cuts at (`TextureKind::AlphaMask`).
+/// glTF's default alpha cutoff.
 const ALPHA_CUTOFF: f32 = 0.5;
 
 /// The radius of a point light without a `range` (step 4).
@@ -52,24 +63,151 @@ struct Gather<'a> {
     warnings: Vec<String>,
     /// Material index per glTF material; the default material is the last.
     default_material: u32,
+    /// Whether the file uses Draco, and how many primitives it compressed (skipped).
+    draco: bool,
+    skipped_draco: usize,
+    /// Primitives whose morph targets were ignored.
+    morphed: usize,
+    /// The document's node count: a deeper walk has met a cycle.
+    nodes: usize,
 }
 
-/// Loads a `.gltf` or `.glb` file.
+/// The extension of Draco-compressed primitives, which this importer cannot decode (step 5).
+const DRACO: &str = "KHR_draco_mesh_compression";
+/// Extensions read (or harmless to ignore) without a warning.
+const KNOWN_EXTENSIONS: [&str; 3] = ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
+
+/// Loads a `.gltf` or `.glb` file. Every error is one line naming the file (step 6).
 pub fn load(path: &Path) -> Result<Scene> {
     if !path.is_file() {
         bail!("scene file {} not found", path.display());
     }
-    let (doc, buffers, images) = gltf::import(path).map_err(|e| anyhow!("glTF file {}: {e}", path.display()))?;
+    // The checks of `import` keep the `gltf` crate from indexing past its arrays; should one be
+    // missed, its panic still becomes an error here, not an abort.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| load_checked(path)));
+    loaded.unwrap_or_else(|panic| {
+        let what = panic.downcast_ref::<String>().map(String::as_str).or_else(|| panic.downcast_ref::<&str>().copied()).unwrap_or("unknown failure");
+        Err(anyhow!("glTF file {}: the importer failed: {}", path.display(), one_line(what)))
+    })
+}
+
+/// `text` on one line: its lines joined by "; ".
+fn one_line(text: &str) -> String {
+    text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ")
+}
+
+/// The document, its buffers and its images (`None`: an image that failed, with a warning),
+/// checked so that reading them cannot index past an array or a buffer (step 6).
+type Imported = (gltf::Document, Vec<gltf::buffer::Data>, Vec<Option<gltf::image::Data>>);
+
+fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read it: {e}"))?;
+    let gltf::Gltf { document: doc, mut blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| match e {
+        gltf::Error::Deserialize(e) if e.is_data() => format!("not a glTF 2.0 document: {}", one_line(&e.to_string())),
+        gltf::Error::Deserialize(e) => format!("not valid JSON: {}", one_line(&e.to_string())),
+        gltf::Error::Binary(e) => format!("not a valid .glb container: {}", one_line(&e.to_string())),
+        e => one_line(&e.to_string()),
+    })?;
+    let json = doc.as_json();
+    // The crate's own validation indexes `accessors` with a primitive's POSITION unchecked.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some((semantic, index)) = prim.attributes.iter().find(|(_, i)| i.value() >= json.accessors.len()) {
+                let name = match semantic {
+                    gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                    gltf::json::validation::Checked::Invalid => "?".into(),
+                };
+                return Err(format!("meshes[{m}].primitives[{p}].attributes.{name}: accessor {} is out of range ({} accessors)", index.value(), json.accessors.len()));
+            }
+        }
+    }
+    use gltf::json::validation::Validate;
+    let mut problems = Vec::new();
+    json.validate(json, gltf::json::Path::new, &mut |at, error| problems.push(format!("{}: {error}", at())));
+    // Draco may be required (its primitives are skipped), and its accessors have no data of
+    // their own (no bufferView).
+    let draco = json.extensions_used.iter().chain(&json.extensions_required).any(|e| e == DRACO);
+    problems.retain(|p| !(p.starts_with("extensionsRequired") && p.contains(&format!("\"{DRACO}\""))));
+    problems.retain(|p| !(draco && p.starts_with("accessors[") && p.ends_with("].bufferView: Missing data")));
+    if let Some(first) = problems.first() {
+        let more = match problems.len() {
+            1 => String::new(),
+            n => format!(" (and {} more problems)", n - 1),
+        };
+        return Err(format!("invalid glTF: {}{more}", one_line(first)));
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let what = match b.source() {
+            gltf::buffer::Source::Uri(u) if !u.starts_with("data:") => format!("buffer {} ({u:?})", b.index()),
+            _ => format!("buffer {}", b.index()),
+        };
+        let data = gltf::buffer::Data::from_source_and_blob(b.source(), Some(base), &mut blob).map_err(|e| format!("{what}: {}", one_line(&e.to_string())))?;
+        if data.len() < b.length() {
+            return Err(format!("{what}: byteLength is {} but it holds {} bytes", b.length(), data.len()));
+        }
+        buffers.push(data);
+    }
+    check_views(&doc, &buffers)?;
+    let images = doc
+        .images()
+        .map(|i| match gltf::image::Data::from_source(i.source(), Some(base), &buffers) {
+            Ok(d) => Some(d),
+            Err(e) => {
+                warn(format!("image {}: {}; materials drawn without it", i.index(), one_line(&e.to_string())));
+                None
+            }
+        })
+        .collect();
+    Ok((doc, buffers, images))
+}
+
+/// Every buffer view inside its buffer, and every accessor's elements inside its view.
+fn check_views(doc: &gltf::Document, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    for v in doc.views() {
+        let (end, len) = (v.offset().checked_add(v.length()), buffers[v.buffer().index()].len());
+        if end.is_none_or(|end| end > len) {
+            return Err(format!("bufferView {}: bytes {}..{} lie past the end of buffer {} ({len} bytes)", v.index(), v.offset(), v.offset().saturating_add(v.length()), v.buffer().index()));
+        }
+    }
+    for a in doc.accessors() {
+        let what = format!("accessor {}", a.index());
+        if a.count() == 0 {
+            return Err(format!("{what}: count is 0 (at least 1 expected)"));
+        }
+        let Some(v) = a.view() else { continue };
+        let stride = v.stride().unwrap_or(a.size());
+        if stride < a.size() {
+            return Err(format!("{what}: bufferView {} has byteStride {stride}, less than the {}-byte element", v.index(), a.size()));
+        }
+        let need = (a.count() - 1).checked_mul(stride).and_then(|n| n.checked_add(a.offset() + a.size()));
+        if need.is_none_or(|need| need > v.length()) {
+            return Err(format!(
+                "{what}: count {} × stride {stride} from byteOffset {} lies past the end of bufferView {} ({} bytes)",
+                a.count(),
+                a.offset(),
+                v.index(),
+                v.length()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Steps 1–5 on a file that exists.
+fn load_checked(path: &Path) -> Result<Scene> {
     let mut warnings = Vec::new();
     let mut warn = |what: String| warnings.push(format!("{}: {what}", path.display()));
+    let (doc, buffers, images) = import(path, &mut warn).map_err(|e| anyhow!("glTF file {}: {e}", path.display()))?;
     if doc.skins().next().is_some() {
-        warn("skins ignored".into());
+        warn(format!("{} skin(s) ignored (meshes drawn in their bind pose)", doc.skins().count()));
     }
     if doc.animations().next().is_some() {
-        warn("animations ignored".into());
+        warn(format!("{} animation(s) ignored (nodes drawn at rest)", doc.animations().count()));
     }
     for ext in doc.extensions_used() {
-        if !matches!(ext, "KHR_lights_punctual" | "KHR_materials_emissive_strength" | "KHR_texture_transform") {
+        if !KNOWN_EXTENSIONS.contains(&ext) && ext != DRACO {
             warn(format!("extension {ext} ignored"));
         }
     }
@@ -77,10 +215,22 @@ pub fn load(path: &Path) -> Result<Scene> {
     let default_material = materials.len() as u32;
     materials.push(Material::diffuse("default", [1.0; 3]));
 
-    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material };
+    let draco = doc.extensions_used().any(|e| e == DRACO) || doc.extensions_required().any(|e| e == DRACO);
+    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
     let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {} has no scene", path.display()))?;
     for node in scene.nodes() {
-        visit(&mut g, &node, Mat4::IDENTITY, path)?;
+        visit(&mut g, &node, Mat4::IDENTITY, 0, path)?;
+    }
+    if g.morphed > 0 {
+        g.warnings.push(format!("{}: morph targets of {} primitive(s) ignored (base shapes drawn)", path.display(), g.morphed));
+    }
+    if g.skipped_draco > 0 {
+        let left = if g.meshes.is_empty() { "" } else { "; the rest loaded" };
+        g.warnings.push(format!("{}: {} {DRACO} primitive(s) skipped: compressed meshes cannot be decoded{left}", path.display(), g.skipped_draco));
+    }
+    if g.meshes.is_empty() {
+        let why = if g.skipped_draco > 0 { format!(" (all {} are {DRACO}-compressed, which cannot be decoded)", g.skipped_draco) } else { String::new() };
+        bail!("glTF file {}: no triangle mesh to draw in its scene{why}", path.display());
     }
     let name = path.file_stem().map_or_else(|| "gltf".to_owned(), |s| s.to_string_lossy().into_owned());
     let bounds = super::bounds_of(&g.meshes);
@@ -102,8 +252,11 @@ pub fn load(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Step 1 (and 3, 4) for `node` under the world transform `parent`.
-fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, path: &Path) -> Result<()> {
+/// Step 1 (and 3, 4) for `node` under the world transform `parent`, `depth` nodes down.
+fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, depth: usize, path: &Path) -> Result<()> {
+    if depth >= g.nodes {
+        bail!("glTF file {}: node {} is its own ancestor (the node hierarchy has a cycle)", path.display(), node.index());
+    }
     let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
     let label = |kind: &str, index: usize, name: Option<&str>| match name {
         Some(n) => format!("{kind} {index} ({n:?})"),
@@ -118,9 +271,14 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, path: &Path) -
                 g.warnings.push(format!("{}: {what}: {:?} primitives ignored (triangles only)", path.display(), prim.mode()));
                 continue;
             }
-            if prim.morph_targets().next().is_some() {
-                g.warnings.push(format!("{}: {what}: morph targets ignored", path.display()));
+            let position = prim.get(&gltf::Semantic::Positions);
+            // Draco's accessors hold no data of their own (no bufferView).
+            if g.draco && position.as_ref().is_some_and(|a| a.view().is_none() && a.sparse().is_none()) {
+                g.skipped_draco += 1;
+                continue;
             }
+            g.morphed += usize::from(prim.morph_targets().next().is_some());
+            check_attributes(&prim).map_err(|e| anyhow!("glTF file {}: {what}: {e}", path.display()))?;
             let reader = prim.reader(|b| g.buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(positions) = reader.read_positions() else {
                 g.warnings.push(format!("{}: {what}: no POSITION, ignored", path.display()));
@@ -185,51 +343,86 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, path: &Path) -
         }
     }
     for child in node.children() {
-        visit(g, &child, world, path)?;
+        visit(g, &child, world, depth + 1, path)?;
     }
     Ok(())
 }
 
-/// Step 2: the document's materials in order, and the textures they name (decoded by the
-/// importer; named `<file>#image<i>` for albedo and `<file>#image<i>-alpha` for coverage).
-fn materials_of(doc: &gltf::Document, images: &[gltf::image::Data], path: &Path, warn: &mut impl FnMut(String)) -> Result<(Vec<Material>, Vec<Texture>)> {
+/// The attributes read have the types the reader reads them as (another type would be misread).
+fn check_attributes(prim: &gltf::Primitive<'_>) -> Result<(), String> {
+    use gltf::accessor::{DataType as T, Dimensions as D};
+    use gltf::Semantic as S;
+    for (semantic, a) in prim.attributes() {
+        let (dims, types): (D, &[T]) = match semantic {
+            S::Positions | S::Normals => (D::Vec3, &[T::F32]),
+            S::TexCoords(0) => (D::Vec2, &[T::F32, T::U8, T::U16]),
+            _ => continue,
+        };
+        if a.dimensions() != dims || !types.contains(&a.data_type()) {
+            return Err(format!("{semantic:?} is accessor {} of {:?} {:?}; {dims:?} of {types:?} expected", a.index(), a.dimensions(), a.data_type()));
+        }
+    }
+    if let Some(a) = prim.indices() {
+        if a.dimensions() != D::Scalar || !matches!(a.data_type(), T::U8 | T::U16 | T::U32) {
+            return Err(format!("indices are accessor {} of {:?} {:?}; SCALAR U8, U16 or U32 expected", a.index(), a.dimensions(), a.data_type()));
+        }
+    }
+    Ok(())
+}
+
+/// Step 2: the document's materials in order, and the textures they name: `<file>#image<i>` for
+/// an albedo, `<file>#image<i>-alpha<a>-cut<c>` for a coverage mask (texture alpha × factor
+/// alpha `a` against the cutoff `c`, stored as 0 or 255 so that the alpha test's fixed cut
+/// keeps exactly the texels at or above `c`), `<file>#material<m>-alpha` for a mask without a
+/// texture whose factor alpha lies below its cutoff (the whole material cut out).
+fn materials_of(doc: &gltf::Document, images: &[Option<gltf::image::Data>], path: &Path, warn: &mut impl FnMut(String)) -> Result<(Vec<Material>, Vec<Texture>)> {
     let mut materials = Vec::new();
     let mut textures: Vec<Texture> = Vec::new();
-    let mut texture = |image: usize, kind: TextureKind, warn: &mut dyn FnMut(String)| -> Option<PathBuf> {
-        let suffix = if kind == TextureKind::AlphaMask { "-alpha" } else { "" };
-        let name = PathBuf::from(format!("{}#image{image}{suffix}", path.display()));
-        if textures.iter().any(|t| t.path == name) {
-            return Some(name);
-        }
-        match images.get(image).map(dynamic_image) {
-            Some(Ok(img)) => {
-                textures.push(super::obj::texture_of(name.clone(), img, kind));
-                Some(name)
-            }
-            Some(Err(e)) => {
-                warn(format!("image {image}: {e}; material drawn without it"));
+    let decoded: Vec<Option<image::RgbaImage>> = images
+        .iter()
+        .enumerate()
+        .map(|(i, d)| match d.as_ref().map(dynamic_image)? {
+            Ok(img) => Some(img.into_rgba8()),
+            Err(e) => {
+                warn(format!("image {i}: {e}; materials drawn without it"));
                 None
             }
-            None => None,
-        }
-    };
+        })
+        .collect();
+    let named = |suffix: String| PathBuf::from(format!("{}#{suffix}", path.display()));
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
         let [r, gr, b, a] = pbr.base_color_factor();
-        let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_owned);
+        let index = m.index().unwrap_or(0);
+        let name = m.name().map_or_else(|| format!("material {index}"), str::to_owned);
         let mut mat = Material::diffuse(&name, [r, gr, b].map(|c| c.clamp(0.0, 1.0)));
         mat.specular = pbr.metallic_factor().clamp(0.0, 1.0);
         mat.roughness = pbr.roughness_factor().clamp(0.01, 1.0);
         let image = pbr.base_color_texture().map(|t| t.texture().source().index());
-        mat.albedo_texture = image.and_then(|i| texture(i, TextureKind::Albedo, warn));
+        let img = image.and_then(|i| Some((i, decoded.get(i)?.as_ref()?)));
+        if let Some((i, img)) = img {
+            let name = named(format!("image{i}"));
+            if !textures.iter().any(|t| t.path == name) {
+                textures.push(super::obj::texture_of(name.clone(), image::DynamicImage::ImageRgba8(img.clone()), TextureKind::Albedo));
+            }
+            mat.albedo_texture = Some(name);
+        }
         match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => {}
             gltf::material::AlphaMode::Mask => {
                 let cutoff = m.alpha_cutoff().unwrap_or(ALPHA_CUTOFF);
-                if cutoff != ALPHA_CUTOFF {
-                    warn(format!("material {name:?}: alphaCutoff {cutoff} read as {ALPHA_CUTOFF}"));
+                let alpha = a.clamp(0.0, 1.0);
+                let (name, width, height, coverage): (PathBuf, u32, u32, Vec<f32>) = match img {
+                    Some((i, img)) => (named(format!("image{i}-alpha{alpha}-cut{cutoff}")), img.width(), img.height(), img.pixels().map(|p| f32::from(p.0[3]) / 255.0 * alpha).collect()),
+                    None => (named(format!("material{index}-alpha")), 1, 1, vec![alpha]),
+                };
+                if coverage.iter().any(|&c| c < cutoff) {
+                    if !textures.iter().any(|t| t.path == name) {
+                        let rgba8 = coverage.iter().flat_map(|&c| [if c >= cutoff { 255 } else { 0 }; 4]).collect();
+                        textures.push(Texture { path: name.clone(), kind: TextureKind::AlphaMask, width, height, rgba8 });
+                    }
+                    mat.alpha_mask_texture = Some(name);
                 }
-                mat.alpha_mask_texture = image.and_then(|i| texture(i, TextureKind::AlphaMask, warn));
             }
             gltf::material::AlphaMode::Blend => mat.opacity = a.clamp(0.0, 1.0),
         }

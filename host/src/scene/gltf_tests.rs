@@ -179,3 +179,18 @@ fn gltf_refusals_name_the_file_and_what() {
     let e = load_err(&p);
     assert!(e.contains("nobin.gltf") && !e.contains('\n'), "{e}");
 }
+
+/// `MASK` without a texture: the factor's alpha alone against `alphaCutoff` — below it the whole
+/// material is cut out (a 1×1 mask of 0), at or above it nothing is.
+#[test]
+fn gltf_mask_without_texture_cuts_by_the_factor_alpha() {
+    let dir = TempDir::new("gltf-mask");
+    write_leaf(&dir);
+    std::fs::write(dir.0.join("tri.bin"), triangle_bin()).unwrap();
+    for (alpha, cutoff, cut) in [(0.3, 0.5, true), (0.3, 0.25, false), (0.5, 0.5, false)] {
+        let plain = format!(r#"{{"name": "plain", "alphaMode": "MASK", "alphaCutoff": {cutoff}, "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, {alpha}]}}}}"#);
+        let s = load(&dir.write("mask.gltf", &document(Some("tri.bin"), POINT).replace(r#"{"name": "plain"}"#, &plain)));
+        let mask = s.materials[2].alpha_mask_texture.as_ref().map(|p| s.texture(p).unwrap());
+        assert_eq!(mask.map(|t| (t.width, t.height, t.rgba8.clone())), cut.then(|| (1, 1, vec![0; 4])), "alpha {alpha}, cutoff {cutoff}");
+    }
+}
