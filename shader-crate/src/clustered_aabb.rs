@@ -109,10 +109,9 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
                 unroll8!(u => {
                     if t + u < m {
                         let (centre, r) = staged_sphere(s, t + u);
-                        // Spot lights (frame-uniform `EFFECT_SPOT`): the cone too, combined with
-                        // `&` (no short-circuit branch around the load, as in the BVH walk).
-                        let cone = spot_may_meet(effects, lights, num_lights, batch + t + u, c0, r0);
-                        if lighting::sphere_intersects_aabb(centre, r, aabb) & cone {
+                        // Spot lights (`EFFECT_SPOT`): the cone too, read and tested only for the
+                        // few lights whose sphere meets the box.
+                        if lighting::sphere_intersects_aabb(centre, r, aabb) && spot_may_meet(effects, lights, num_lights, batch + t + u, c0, r0) {
                             if write {
                                 list.put(base + n, batch + t + u);
                             }
@@ -123,10 +122,9 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
                 unroll8!(u => {
                     if t + 8 + u < m {
                         let (centre, r) = staged_sphere(s, t + 8 + u);
-                        // Spot lights (frame-uniform `EFFECT_SPOT`): the cone too, combined with
-                        // `&` (no short-circuit branch around the load, as in the BVH walk).
-                        let cone = spot_may_meet(effects, lights, num_lights, batch + t + 8 + u, c0, r0);
-                        if lighting::sphere_intersects_aabb(centre, r, aabb) & cone {
+                        // Spot lights (`EFFECT_SPOT`): the cone too, read and tested only for the
+                        // few lights whose sphere meets the box.
+                        if lighting::sphere_intersects_aabb(centre, r, aabb) && spot_may_meet(effects, lights, num_lights, batch + t + 8 + u, c0, r0) {
                             if write {
                                 list.put(base + n, batch + t + 8 + u);
                             }

@@ -340,13 +340,11 @@ impl TileCull {
         if effects & crate::light_types::EFFECT_SPOT == 0 || n == 0 {
             return (a, b);
         }
-        // Branch-free around the loads (valid indices on every invocation), as in the BVH walk.
+        // The cone record is read and tested only for lights the tile keeps by range.
         let (c0, r0) = self.frustum.bounding_sphere();
-        let last = n - 1;
-        let (ia, ib) = (if first < n { first } else { last }, if first + 1 < n { first + 1 } else { last });
-        let ca = crate::light_types::spot_may_meet(effects, lights, n, ia, c0, r0);
-        let cb = crate::light_types::spot_may_meet(effects, lights, n, ib, c0, r0);
-        (a & ca, b & cb)
+        let ca = a && crate::light_types::spot_may_meet(effects, lights, n, first, c0, r0);
+        let cb = b && crate::light_types::spot_may_meet(effects, lights, n, first + 1, c0, r0);
+        (ca, cb)
     }
 }
 

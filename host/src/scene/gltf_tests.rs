@@ -5,24 +5,18 @@ use super::gltf::radius_without_range;
 use super::tests::{assets, load_err, temp::TempDir};
 use super::*;
 
+/// The glTF builders of the integration tests (`.glb` containers, base64).
+#[path = "../../../tests/common/gltf.rs"]
+#[allow(dead_code)]
+mod builder;
+use builder::{base64, glb};
+
 /// One triangle: positions (36 B) then u16 indices (6 B, padded to 8).
 fn triangle_bin() -> Vec<u8> {
     let mut b: Vec<u8> = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     b.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
     b.extend([0, 0]);
     b
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            out.push(if k <= c.len() { A[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
 }
 
 /// The document: `uri` names the buffer (a file, a data URI, or none for `.glb`); `light`
@@ -73,23 +67,6 @@ fn document(uri: Option<&str>, light: &str) -> String {
   ]
 }}"#
     )
-}
-
-/// A `.glb` container of `json` and `bin` (each chunk padded to 4 bytes).
-fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-    let mut j = json.as_bytes().to_vec();
-    j.resize(j.len().div_ceil(4) * 4, b' ');
-    let mut b = bin.to_vec();
-    b.resize(b.len().div_ceil(4) * 4, 0);
-    let total = 12 + 8 + j.len() + 8 + b.len();
-    let mut out = Vec::new();
-    for w in [0x4654_6c67u32, 2, total as u32, j.len() as u32, 0x4e4f_534a] {
-        out.extend(w.to_le_bytes());
-    }
-    out.extend(&j);
-    out.extend([b.len() as u32, 0x004e_4942].iter().flat_map(|w| w.to_le_bytes()));
-    out.extend(&b);
-    out
 }
 
 const POINT: &str = r#"{"type": "point", "intensity": 1, "range": 1}"#;
