@@ -25,7 +25,11 @@
 //! **Variants.** A scene without specular materials runs the `_diffuse` kernels: with
 //! `SPECULAR = false` the specular lobe is not in the compiled code (`shade_variant`), so such a
 //! scene never runs it ("simulate only the effects a scene calls for"). The Forward+ fragment
-//! shader selects the variant with a frame-uniform branch on the specular bit.
+//! shader selects the variant with a frame-uniform branch on the specular bit. The light types
+//! (cone falloff, directional records) are specialised per pipeline instead: the entries take
+//! them as a specialization constant (`light_types`, "Specialised pipelines"), so the driver
+//! folds [`shade_lights`]' and [`shade_directional_lights`]' `EFFECT_SPOT` / `EFFECT_DIRECTIONAL`
+//! branches away.
 use crate::layout::*;
 use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SPOT};
 use crate::{lighting, octahedral, reconstruct, spot};
