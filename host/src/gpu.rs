@@ -4,7 +4,7 @@
 //! the device opens. The entries that shade or cull punctual lights are [`LightCompute`] /
 //! [`LightRaster`]: a pipeline per light-type mix, created when a frame first needs it
 //! (`vk::light_typed`).
-use crate::vk::{Blend, ComputePipeline, Context, ContextOptions, DepthTest, GraphicsPipeline, LightTyped, Profiler, Recorder, ShaderModule, TargetFormat, VkResult};
+use crate::vk::{Blend, ComputePipeline, Context, ContextOptions, DepthTest, GraphicsPipeline, LightTyped, LightTypedModules, Profiler, Recorder, ShaderModule, TargetFormat, VkResult};
 use shaders::kernels::{self, RasterKernel};
 use shaders::layout::*;
 use std::sync::Arc;
@@ -66,7 +66,7 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    pub fn new(ctx: &Context, module: &Arc<ShaderModule>) -> VkResult<Self> {
+    pub fn new(ctx: &Context, module: &Arc<ShaderModule>, light: &Arc<LightTypedModules>) -> VkResult<Self> {
         Ok(Self {
             octa_roundtrip: ComputePipeline::new(ctx, module, kernels::OCTA_ROUNDTRIP)?,
             cluster_keys: ComputePipeline::new(ctx, module, kernels::CLUSTER_KEYS)?,
@@ -77,15 +77,15 @@ impl Kernels {
             record_pages: ComputePipeline::new(ctx, module, kernels::RECORD_PAGES)?,
             store_slots: ComputePipeline::new(ctx, module, kernels::STORE_SLOTS)?,
             compact_clusters: ComputePipeline::new(ctx, module, kernels::COMPACT_CLUSTERS)?,
-            cluster_light_counts: LightTyped::compute(module, kernels::CLUSTER_LIGHT_COUNTS),
-            cluster_light_fill: LightTyped::compute(module, kernels::CLUSTER_LIGHT_FILL),
+            cluster_light_counts: LightTyped::compute(light, kernels::CLUSTER_LIGHT_COUNTS),
+            cluster_light_fill: LightTyped::compute(light, kernels::CLUSTER_LIGHT_FILL),
             shade_clustered: [
-                LightTyped::compute(module, kernels::SHADE_CLUSTERED_DIFFUSE),
-                LightTyped::compute(module, kernels::SHADE_CLUSTERED_SPECULAR),
+                LightTyped::compute(light, kernels::SHADE_CLUSTERED_DIFFUSE),
+                LightTyped::compute(light, kernels::SHADE_CLUSTERED_SPECULAR),
             ],
             shade_deferred: [
-                LightTyped::compute(module, kernels::SHADE_DEFERRED_DIFFUSE),
-                LightTyped::compute(module, kernels::SHADE_DEFERRED_SPECULAR),
+                LightTyped::compute(light, kernels::SHADE_DEFERRED_DIFFUSE),
+                LightTyped::compute(light, kernels::SHADE_DEFERRED_SPECULAR),
             ],
             scan_add_offsets: ComputePipeline::new(ctx, module, kernels::SCAN_ADD_OFFSETS)?,
             scan_store_total: ComputePipeline::new(ctx, module, kernels::SCAN_STORE_TOTAL)?,
@@ -104,25 +104,25 @@ impl Kernels {
             bvh_spheres: ComputePipeline::new(ctx, module, kernels::BVH_SPHERES)?,
             bvh_leaves: ComputePipeline::new(ctx, module, kernels::BVH_LEAVES)?,
             bvh_level: ComputePipeline::new(ctx, module, kernels::BVH_LEVEL)?,
-            cluster_light_counts_bvh: LightTyped::compute(module, kernels::CLUSTER_LIGHT_COUNTS_BVH),
-            cluster_light_fill_bvh: LightTyped::compute(module, kernels::CLUSTER_LIGHT_FILL_BVH),
+            cluster_light_counts_bvh: LightTyped::compute(light, kernels::CLUSTER_LIGHT_COUNTS_BVH),
+            cluster_light_fill_bvh: LightTyped::compute(light, kernels::CLUSTER_LIGHT_FILL_BVH),
             shade_tiled: [
-                LightTyped::compute(module, kernels::SHADE_TILED_DIFFUSE),
-                LightTyped::compute(module, kernels::SHADE_TILED_SPECULAR),
+                LightTyped::compute(light, kernels::SHADE_TILED_DIFFUSE),
+                LightTyped::compute(light, kernels::SHADE_TILED_SPECULAR),
             ],
             aabb_bounds: ComputePipeline::new(ctx, module, kernels::AABB_BOUNDS)?,
             aabb_mark: ComputePipeline::new(ctx, module, kernels::AABB_MARK)?,
             aabb_compact: ComputePipeline::new(ctx, module, kernels::AABB_COMPACT)?,
-            aabb_assign: LightTyped::compute(module, kernels::AABB_ASSIGN),
+            aabb_assign: LightTyped::compute(light, kernels::AABB_ASSIGN),
             shade_aabb: [
-                LightTyped::compute(module, kernels::SHADE_AABB_DIFFUSE),
-                LightTyped::compute(module, kernels::SHADE_AABB_SPECULAR),
+                LightTyped::compute(light, kernels::SHADE_AABB_DIFFUSE),
+                LightTyped::compute(light, kernels::SHADE_AABB_SPECULAR),
             ],
             forward_plus_cull: [
-                LightTyped::compute(module, kernels::FORWARD_PLUS_CULL[0]),
-                LightTyped::compute(module, kernels::FORWARD_PLUS_CULL[1]),
+                LightTyped::compute(light, kernels::FORWARD_PLUS_CULL[0]),
+                LightTyped::compute(light, kernels::FORWARD_PLUS_CULL[1]),
             ],
-            forward_plus_cull_widened: kernels::FORWARD_PLUS_CULL_WIDENED.map(|k| LightTyped::compute(module, k)),
+            forward_plus_cull_widened: kernels::FORWARD_PLUS_CULL_WIDENED.map(|k| LightTyped::compute(light, k)),
         })
     }
 }
@@ -155,7 +155,7 @@ pub struct RasterPipelines {
 }
 
 impl RasterPipelines {
-    pub fn new(ctx: &Context, module: &Arc<ShaderModule>) -> VkResult<Self> {
+    pub fn new(ctx: &Context, module: &Arc<ShaderModule>, light: &Arc<LightTypedModules>) -> VkResult<Self> {
         let gbuffer = |target: usize, handles: &[RasterKernel<DrawParams>; 3]| -> VkResult<[GraphicsPipeline<DrawParams>; 3]> {
             let colours = [NORMAL_FORMATS[target], ALBEDO_FORMAT];
             let make = |h: RasterKernel<DrawParams>| GraphicsPipeline::new(ctx, module, h.fragment, h, &colours, DepthTest::NearestWrites);
@@ -164,7 +164,7 @@ impl RasterPipelines {
         let colour = [FORWARD_COLOUR_FORMAT];
         let forward = |h: RasterKernel<ForwardParams>, depth| GraphicsPipeline::new(ctx, module, h.fragment, h, &colour, depth);
         let d = &kernels::FORWARD_DEPTH;
-        let shade = |s: &[RasterKernel<ForwardParams>; 3]| s.map(|h| LightTyped::raster(module, h, &[(FORWARD_COLOUR_FORMAT, Blend::Replace)], DepthTest::EqualReadOnly));
+        let shade = |s: &[RasterKernel<ForwardParams>; 3]| s.map(|h| LightTyped::raster(light, h, &[(FORWARD_COLOUR_FORMAT, Blend::Replace)], DepthTest::EqualReadOnly));
         Ok(Self {
             gbuffer: [gbuffer(0, &kernels::GBUFFER)?, gbuffer(1, &kernels::GBUFFER_F32)?],
             forward_depth: [forward(d[0], DepthTest::NearestWrites)?, forward(d[1], DepthTest::NearestWrites)?],
@@ -181,6 +181,10 @@ pub struct Gpu {
     pub compute_module: Arc<ShaderModule>,
     /// The raster module ([`GRAPHICS_SPV`]), likewise.
     pub graphics_module: Arc<ShaderModule>,
+    /// The compute module frozen to each light-type mix, for the light-typed kernels.
+    pub light_compute: Arc<LightTypedModules>,
+    /// The raster module frozen to each light-type mix, for the light-typed raster passes.
+    pub light_graphics: Arc<LightTypedModules>,
     pub ctx: Context,
 }
 
@@ -196,12 +200,21 @@ impl Gpu {
 
     fn with_context(ctx: Context) -> VkResult<Self> {
         let made = (|| {
-            let compute = Arc::new(ShaderModule::new(&ctx, "manylights compute kernels", COMPUTE_SPV)?);
-            let graphics = Arc::new(ShaderModule::new(&ctx, "manylights raster shaders", GRAPHICS_SPV)?);
-            Ok((Kernels::new(&ctx, &compute)?, RasterPipelines::new(&ctx, &graphics)?, compute, graphics))
+            // The entries that do not read the light types get the modules frozen to point
+            // lights (`vk::pipeline::freeze_spec_constant`: no specialization constant left).
+            let (id, points) = (shaders::light_types::LIGHT_TYPES_SPEC_ID, 0);
+            let compute = Arc::new(ShaderModule::frozen(&ctx, "manylights compute kernels", COMPUTE_SPV, id, points)?);
+            let graphics = Arc::new(ShaderModule::frozen(&ctx, "manylights raster shaders", GRAPHICS_SPV, id, points)?);
+            let light_compute = LightTypedModules::new(&ctx, "manylights compute kernels (light types)", COMPUTE_SPV);
+            let light_graphics = LightTypedModules::new(&ctx, "manylights raster shaders (light types)", GRAPHICS_SPV);
+            let kernels = Kernels::new(&ctx, &compute, &light_compute)?;
+            let raster = RasterPipelines::new(&ctx, &graphics, &light_graphics)?;
+            Ok((kernels, raster, compute, graphics, light_compute, light_graphics))
         })();
         match made {
-            Ok((kernels, raster, compute_module, graphics_module)) => Ok(Self { kernels, raster, compute_module, graphics_module, ctx }),
+            Ok((kernels, raster, compute_module, graphics_module, light_compute, light_graphics)) => {
+                Ok(Self { kernels, raster, compute_module, graphics_module, light_compute, light_graphics, ctx })
+            }
             // Name what the validation layer saw, not just the failed call.
             Err(e) => match ctx.take_validation_messages() {
                 m if m.is_empty() => Err(e),

@@ -27,7 +27,8 @@
 //! come from the push constants: every entry that shades or culls punctual lights takes them as
 //! the specialization constant [`LIGHT_TYPES_SPEC_ID`] and overrides the frame's bits with it
 //! ([`specialise`]). The host creates one pipeline per light-type mix a scene uses
-//! ([`light_type_variant`]: at most [`LIGHT_TYPE_VARIANTS`]), so the driver compiles each with the
+//! ([`light_type_variant`]: at most [`LIGHT_TYPE_VARIANTS`]), from the module with the constant
+//! frozen to the mix's bits (`host/src/vk/light_typed.rs`), so the driver compiles each with the
 //! bits as constants: a scene without spots has no cone test and no cone falloff in its machine
 //! code, a scene without directional lights no directional records, and one with two directional
 //! lights exactly two. This is the specular variants' "simulate only what the scene calls for"

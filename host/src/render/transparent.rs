@@ -219,7 +219,7 @@ impl Transparency {
         let pipe = |h: kernels::RasterKernel<TransparentParams>, colours| GraphicsPipeline::blended(ctx, raster, h.fragment, h, colours, DepthTest::NearerReadOnly);
         let keys = if all_lights { None } else { Some(pipe(kernels::TRANSPARENT_KEYS, &[])?) };
         let s = if weighted { &kernels::TRANSPARENT_WEIGHTED } else { &kernels::TRANSPARENT_SHADE }[usize::from(all_lights)];
-        let shade = s.map(|h| LightTyped::raster(raster, h, colours, DepthTest::NearerReadOnly));
+        let shade = s.map(|h| LightTyped::raster(&gpu.light_graphics, h, colours, DepthTest::NearerReadOnly));
         let resolve = ComputePipeline::new(ctx, &gpu.compute_module, if weighted { kernels::OIT_RESOLVE_WEIGHTED } else { kernels::OIT_RESOLVE })?;
         let (pixels, g) = (f.params.count as u64, &f.params.grid);
         let store = if weighted {

@@ -1,9 +1,12 @@
 //! Pipelines specialised by a frame's light types (`shaders::light_types`, "Specialised
 //! pipelines"): an entry that shades or culls punctual lights gets one pipeline per light-type
 //! mix a scene uses (at most `LIGHT_TYPE_VARIANTS`), each created the first time a frame needs
-//! it and kept, with the light-type bits as the specialization constant `LIGHT_TYPES_SPEC_ID`.
-//! The driver compiles each with those bits folded: a scene of point lights runs pipelines with
-//! no cone test and no directional loop in them.
+//! it and kept. The light-type bits are the module's specialization constant
+//! `LIGHT_TYPES_SPEC_ID`, frozen into a module of their own per mix ([`LightTypedModules`],
+//! `pipeline::freeze_spec_constant`; shared by every entry of the mix), so the driver compiles
+//! each pipeline with those bits as constants: a scene of point lights runs pipelines with no
+//! cone test and no directional loop in them.
+use super::context::Context;
 use super::error::VkResult;
 use super::pipeline::{ComputePipeline, ShaderModule};
 use super::raster::{Blend, DepthTest, GraphicsPipeline, TargetFormat};
@@ -12,18 +15,42 @@ use shaders::kernels::{Kernel, RasterKernel};
 use shaders::light_types::{light_type_variant, LIGHT_TYPES_SPEC_ID, LIGHT_TYPE_MASK, LIGHT_TYPE_VARIANTS};
 use std::sync::{Arc, OnceLock};
 
-type Make<T> = Box<dyn Fn(&ShaderModule, u32) -> VkResult<T>>;
+/// One SPIR-V module frozen to each light-type mix, each created on first use.
+pub struct LightTypedModules {
+    ctx: Context,
+    name: &'static str,
+    spirv: &'static [u8],
+    modules: [OnceLock<ShaderModule>; LIGHT_TYPE_VARIANTS],
+}
+
+impl LightTypedModules {
+    pub fn new(ctx: &Context, name: &'static str, spirv: &'static [u8]) -> Arc<Self> {
+        Arc::new(Self { ctx: ctx.clone(), name, spirv, modules: std::array::from_fn(|_| OnceLock::new()) })
+    }
+
+    /// The module for the light-type bits of `effects`.
+    fn module(&self, effects: u32) -> VkResult<&ShaderModule> {
+        let cell = &self.modules[light_type_variant(effects)];
+        if let Some(m) = cell.get() {
+            return Ok(m);
+        }
+        let m = ShaderModule::frozen(&self.ctx, self.name, self.spirv, LIGHT_TYPES_SPEC_ID, effects & LIGHT_TYPE_MASK)?;
+        Ok(cell.get_or_init(|| m))
+    }
+}
+
+type Make<T> = Box<dyn Fn(&ShaderModule) -> VkResult<T>>;
 
 /// The pipelines of one entry point, one per light-type mix ([`LightTyped::get`]).
 pub struct LightTyped<T> {
-    module: Arc<ShaderModule>,
+    modules: Arc<LightTypedModules>,
     make: Make<T>,
     variants: [OnceLock<T>; LIGHT_TYPE_VARIANTS],
 }
 
 impl<T> LightTyped<T> {
-    fn with(module: &Arc<ShaderModule>, make: Make<T>) -> Self {
-        Self { module: module.clone(), make, variants: std::array::from_fn(|_| OnceLock::new()) }
+    fn with(modules: &Arc<LightTypedModules>, make: Make<T>) -> Self {
+        Self { modules: modules.clone(), make, variants: std::array::from_fn(|_| OnceLock::new()) }
     }
 
     /// The pipeline for the light-type bits of a frame's `effects` (created on first use).
@@ -32,7 +59,7 @@ impl<T> LightTyped<T> {
         if let Some(p) = cell.get() {
             return Ok(p);
         }
-        let made = (self.make)(&self.module, effects & LIGHT_TYPE_MASK)?;
+        let made = (self.make)(self.modules.module(effects)?)?;
         Ok(cell.get_or_init(|| made))
     }
 
@@ -43,19 +70,16 @@ impl<T> LightTyped<T> {
 }
 
 impl<P: Pod> LightTyped<ComputePipeline<P>> {
-    pub fn compute(module: &Arc<ShaderModule>, kernel: Kernel<P>) -> Self {
-        Self::with(module, Box::new(move |m, bits| ComputePipeline::specialised(&m.ctx, m, kernel, &[(LIGHT_TYPES_SPEC_ID, bits)])))
+    pub fn compute(modules: &Arc<LightTypedModules>, kernel: Kernel<P>) -> Self {
+        Self::with(modules, Box::new(move |m| ComputePipeline::new(&m.ctx, m, kernel)))
     }
 }
 
 impl<P: 'static> LightTyped<GraphicsPipeline<P>> {
     /// Pipelines drawing `kernel` into colour targets `colours` and a depth target (as
     /// [`GraphicsPipeline::blended`]).
-    pub fn raster(module: &Arc<ShaderModule>, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest) -> Self {
+    pub fn raster(modules: &Arc<LightTypedModules>, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest) -> Self {
         let colours = colours.to_vec();
-        Self::with(
-            module,
-            Box::new(move |m, bits| GraphicsPipeline::specialised(&m.ctx, m, kernel.fragment, kernel, &colours, depth, &[(LIGHT_TYPES_SPEC_ID, bits)])),
-        )
+        Self::with(modules, Box::new(move |m| GraphicsPipeline::blended(&m.ctx, m, kernel.fragment, kernel, &colours, depth)))
     }
 }

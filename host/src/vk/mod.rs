@@ -36,6 +36,6 @@ pub use draw::{Attachment, Binding, ImageUse, Load};
 pub use overlay::Overlay;
 pub use present::{PresentMode, Presented, Presenter};
 pub use pipeline::{fold, ComputePipeline, Recorder, ShaderModule, MAX_GROUPS_PER_AXIS};
-pub use light_typed::LightTyped;
+pub use light_typed::{LightTyped, LightTypedModules};
 pub use profiler::{PassTiming, Profiler, Queue};
 pub use raster::{Blend, DepthTest, GraphicsPipeline, TargetFormat};
