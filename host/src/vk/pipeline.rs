@@ -22,11 +22,6 @@ pub struct ShaderModule {
 }
 
 impl ShaderModule {
-    /// Creates a module from SPIR-V bytes (little-endian words).
-    pub fn new(ctx: &Context, name: &str, spirv: &[u8]) -> VkResult<Self> {
-        Self::from_words(ctx, name, &Self::words(name, spirv)?)
-    }
-
     /// A module of `spirv` with its specialization constant `spec_id` frozen to the constant
     /// `value` ([`freeze_spec_constant`]): what a pipeline specialised to `value` compiles, with
     /// no specialization constant left in the module.
@@ -112,23 +107,8 @@ pub struct ComputePipeline<P> {
     pub kernel: Kernel<P>,
 }
 
-/// Specialization-constant values `(id, value)` of a pipeline (32-bit constants).
-pub type SpecValues<'a> = &'a [(u32, u32)];
-
-/// The map entries and data of `values`, as `vk::SpecializationInfo` takes them.
-pub(crate) fn spec_map(values: SpecValues<'_>) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
-    let entries = values.iter().enumerate().map(|(i, &(id, _))| vk::SpecializationMapEntry { constant_id: id, offset: 4 * i as u32, size: 4 }).collect();
-    let data = values.iter().flat_map(|&(_, v)| v.to_ne_bytes()).collect();
-    (entries, data)
-}
-
 impl<P: Pod> ComputePipeline<P> {
     pub fn new(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>) -> VkResult<Self> {
-        Self::specialised(ctx, module, kernel, &[])
-    }
-
-    /// [`ComputePipeline::new`] with specialization constants `spec`.
-    pub fn specialised(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>, spec: SpecValues<'_>) -> VkResult<Self> {
         let d = &ctx.device;
         let bindings: Vec<_> = (0..kernel.storage_buffers)
             .map(|b| {
@@ -159,15 +139,10 @@ impl<P: Pod> ComputePipeline<P> {
             }
         };
         let entry = CString::new(kernel.entry).expect("entry names have no NUL");
-        let (map, data) = spec_map(spec);
-        let spec_info = vk::SpecializationInfo::default().map_entries(&map).data(&data);
         let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.raw)
             .name(&entry);
-        if !spec.is_empty() {
-            stage = stage.specialization_info(&spec_info);
-        }
         let full = kernel.cooperative
             && ctx.info.full_subgroups
             && kernel.workgroup_size[0].is_multiple_of(ctx.info.max_subgroup_size);

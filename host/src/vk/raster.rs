@@ -4,7 +4,7 @@
 //! pipelines are by their `Kernel<P>`.
 use super::context::Context;
 use super::error::{CallContext, VkError, VkResult};
-use super::pipeline::{spec_map, ShaderModule, SpecValues};
+use super::pipeline::ShaderModule;
 use ash::vk;
 use shaders::kernels::RasterKernel;
 use std::ffi::CString;
@@ -93,19 +93,6 @@ impl<P> GraphicsPipeline<P> {
     /// A pipeline drawing `kernel` into colour targets of the given formats and blending, and a
     /// depth target.
     pub fn blended(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest) -> VkResult<Self> {
-        Self::specialised(ctx, module, name, kernel, colours, depth, &[])
-    }
-
-    /// [`GraphicsPipeline::blended`] with specialization constants `spec` (fragment stage).
-    pub fn specialised(
-        ctx: &Context,
-        module: &ShaderModule,
-        name: &str,
-        kernel: RasterKernel<P>,
-        colours: &[(TargetFormat, Blend)],
-        depth: DepthTest,
-        spec: SpecValues<'_>,
-    ) -> VkResult<Self> {
         let d = &ctx.device;
         let binding = |b: u32, ty: vk::DescriptorType, stage: vk::ShaderStageFlags| {
             vk::DescriptorSetLayoutBinding::default().binding(b).descriptor_type(ty).descriptor_count(1).stage_flags(stage)
@@ -133,13 +120,10 @@ impl<P> GraphicsPipeline<P> {
         let mut this = Self { ctx: ctx.clone(), raw: vk::Pipeline::null(), layout, set_layout, kernel };
         let vs = CString::new(kernel.vertex).expect("entry names have no NUL");
         let fs = CString::new(kernel.fragment).expect("entry names have no NUL");
-        let (map, data) = spec_map(spec);
-        let spec_info = vk::SpecializationInfo::default().map_entries(&map).data(&data);
-        let mut fragment = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(module.raw).name(&fs);
-        if !spec.is_empty() {
-            fragment = fragment.specialization_info(&spec_info);
-        }
-        let stages = [vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(module.raw).name(&vs), fragment];
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(module.raw).name(&vs),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(module.raw).name(&fs),
+        ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
