@@ -55,6 +55,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
+        dispatch_times: false,
     }
 }
 

@@ -103,6 +103,36 @@ fn render_writes_png_and_stats() {
     assert!(stats["device"]["name"].as_str().unwrap().len() > 2);
 }
 
+/// `--dispatch-times` times each command inside the passes as `pass · kernel` (in the stats
+/// and on stderr); without it only the passes are listed.
+#[test]
+fn render_times_each_dispatch_on_request() {
+    let dir = TempDir::new("cli-dispatch-times");
+    let (png, json) = (dir.join("city.png"), dir.join("city.json"));
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "render", "--scene", "city", "--lights", "300", "--width", "64", "--height", "36", "--frames", "1",
+            "--technique", "clustered-bvh", "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let (ok, _, err) = manylights(&args);
+        assert!(ok, "render failed:\n{err}");
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (stats["gpu_ms"]["passes"].as_object().unwrap().clone(), err)
+    };
+    let (passes, _) = run(&[]);
+    assert!(passes.keys().all(|k| !k.contains(" · ")), "no parts without the flag: {passes:?}");
+    let (passes, err) = run(&["--dispatch-times"]);
+    for part in ["keys · clustered::pixel_keys", "page table · clustered::allocate_pages", "page table · clustered::store_slots", "shading · "] {
+        let ms = passes.iter().find(|(k, _)| k.starts_with(part)).and_then(|(_, v)| v.as_f64());
+        assert!(ms.is_some_and(|ms| ms.is_finite() && ms >= 0.0), "part {part:?}: {passes:?}");
+        assert!(err.contains(part), "stderr lists {part:?}:\n{err}");
+    }
+    for pass in ["keys", "page table", "assignment", "shading"] {
+        assert!(passes[pass].is_number(), "the pass {pass} is still timed: {passes:?}");
+    }
+}
+
 /// `--fp-lists array` reaches Forward+ and its stats: the layout is named and the array's
 /// buffers are listed.
 #[test]

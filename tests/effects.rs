@@ -54,6 +54,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
+        dispatch_times: false,
         width: WIDTH,
         height: HEIGHT,
         tile_size: 16,

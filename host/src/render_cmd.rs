@@ -92,6 +92,10 @@ pub struct RenderArgs {
     /// Animation time in seconds: lights move on small deterministic circles (`lights::animate`).
     #[arg(long)]
     pub time: Option<f32>,
+    /// Also time every dispatch, fill and copy inside each pass (listed as `pass · kernel`
+    /// beneath the passes, and in `--stats`): where a pass's time goes.
+    #[arg(long)]
+    pub dispatch_times: bool,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
@@ -115,6 +119,7 @@ impl RenderArgs {
             sort: self.sort,
             fp_lists: self.fp_lists,
             oit: self.oit,
+            dispatch_times: self.dispatch_times,
         }
     }
 }
@@ -212,7 +217,10 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     crate::debug_frame::save_png(&a.frame.out, a.frame.width, a.frame.height, &frame.pixels)?;
     let queue = |t: &crate::vk::PassTiming| if t.queue == crate::vk::Queue::Main { "" } else { ", async-compute queue" };
     for t in &frame.timings {
-        eprintln!("{:<12} {:9.3} ms (GPU, median of {}{})", t.name, t.ms, a.frames.max(1), queue(t));
+        match t.part {
+            false => eprintln!("{:<12} {:9.3} ms (GPU, median of {}{})", t.name, t.ms, a.frames.max(1), queue(t)),
+            true => eprintln!("  {:<40} {:9.3} ms", t.name, t.ms),
+        }
     }
     let g = &frame.gpu_frame;
     if g.timed {

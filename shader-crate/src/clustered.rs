@@ -5,11 +5,12 @@
 //! # Steps (one entry each; each unpacks its invocation's [`shading::linear_index`] and calls a
 //! pure function)
 //!
-//! 1–5. **Unique clusters** — [`pixel_keys`] (keys, and the marks of their pages), (scan)
-//!    [`record_pages`], [`store_slots`], (scan) [`compact_clusters`]: the page table of
+//! 1–5. **Unique clusters** — [`pixel_keys`] (keys, and the marks of their pages),
+//!    [`allocate_pages`], [`store_slots`], (scan) [`compact_clusters`]: the page table of
 //!    [`crate::page_table`] (steps and memory there). Each mark and slot is cleared by its last
 //!    reader, so no frame clears the tables at their capacity.
-//! 6–7. **Naive assignment** — [`cluster_light_counts`], (scan) [`cluster_light_fill`]: every
+//! 6–7. **Naive assignment** — [`cluster_light_counts`] (and each list's place: [`reserve_list`]),
+//!    [`cluster_light_fill`]: every
 //!    light against each unique cluster's box ([`for_each_cluster_light`], [`crate::lighting`],
 //!    [`crate::cluster_bounds`]); `clustered-bvh` replaces these two with [`crate::clustered_bvh`].
 //! 8. **Shading** — [`shade_clustered_diffuse`] / [`shade_clustered_specular`]: per pixel, key →
@@ -58,22 +59,37 @@ pub fn pixel_keys(
     }
 }
 
-/// 3b. Record which page each dense page index stands for (after the scan of the marks).
-#[spirv(compute(threads(256)))]
-pub fn record_pages(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
+/// 3. Allocate the marked pages in one workgroup (`page_table::allocate_scan`,
+/// `page_table::allocate_run`): page table, pages of the allocation, marks cleared, the page
+/// count, the compaction's indirect dispatch, and the light-reference counter zeroed.
+#[spirv(compute(threads(256)))] // page_table::ALLOCATE_WORKGROUP
+pub fn allocate_pages(
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &AllocatePagesParams,
+    #[spirv(workgroup)] shared: &mut [u32; crate::scan::SCAN_SHARED_WORDS],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] marks: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_base: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_base: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] page_of_alloc: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] counters: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] args: &mut [u32],
 ) {
-    let i = linear_index(wg, nwg, local);
-    if i < p.count && marks[i as usize] != 0 {
-        page_of_alloc[page_base[i as usize] as usize] = i;
-        // The mark's last reader: cleared for the next frame.
-        marks[i as usize] = 0;
+    let c = crate::coop::gpu::GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let (base, total) = page_table::allocate_scan(&c, shared, p.pages, marks);
+    page_table::allocate_run(p.pages, local_index, base, p.capacity, marks, page_base, page_of_alloc);
+    if local_index == 0 {
+        counters[COUNTER_PAGES as usize] = total;
+        // The frame's other counters are stored whole by their passes; the light references
+        // are summed by atomics (`reserve_list`) and start here, so no pass clears the counters.
+        counters[COUNTER_LIGHT_REFS as usize] = 0;
+        let a = crate::indirect::dispatch_args(crate::indirect::saturating_mul(total, PAGE_SIZE), p.compact_per_group);
+        let o = p.args_offset as usize;
+        args[o] = a[0];
+        args[o + 1] = a[1];
+        args[o + 2] = a[2];
     }
 }
 
@@ -167,21 +183,33 @@ pub fn cluster_light_counts(
     #[spirv(push_constant)] p: &FrameParams,
     #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] counts: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] offsets: &mut [u32],
 ) {
     let p = &crate::light_types::specialise(p, light_types);
     let c = linear_index(wg, nwg, local);
-    if c >= p.count {
+    if c >= p.count || c >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }
-    counts[c as usize] = if c < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        for_each_cluster_light(p, bounds, lights, unique[c as usize], |_, _| {})
-    } else {
-        0
-    };
+    let n = for_each_cluster_light(p, bounds, lights, unique[c as usize], |_, _| {});
+    counts[c as usize] = n;
+    offsets[c as usize] = reserve_list(counters, n);
+}
+
+/// 6–7 (both assignments). The start of a cluster's list of `n` lights in the global list: `n`
+/// entries reserved with one atomic add on [`COUNTER_LIGHT_REFS`], which ends the pass as the
+/// frame's total of light references (the fill pass writes nothing when it exceeds the list's
+/// capacity, and the host grows the list). Lists land in the order the clusters reserve them;
+/// each cluster's own list is in light order whatever that order, and shading reads it through
+/// its offset and count. One atomic per cluster instead of a device-wide scan of the counts
+/// (seven dependent dispatches on the H200: 6 µs each).
+#[inline]
+pub fn reserve_list(counters: &mut [u32], n: u32) -> u32 {
+    use crate::light_lists::AtomicAdd;
+    counters[COUNTER_LIGHT_REFS as usize].fetch_add(n)
 }
 
 /// 7. Naive light assignment, pass 2: write each cluster's light indices at its offset.

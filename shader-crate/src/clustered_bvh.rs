@@ -157,7 +157,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(push_constant)] p: &BvhAssignParams,
     #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] spheres: &[LightSphere],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] counts: &mut [u32],
@@ -165,20 +165,18 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] nodes: &[ClusterAabb],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] staged_lists: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] offsets: &mut [u32],
 ) {
     let p = &crate::light_types::specialise(p, light_types);
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let cl = subgroup_item(&c, wg, nwg);
-    if cl >= p.frame.count {
+    if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }
-    let n = if cl < counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters))
-    } else {
-        0
-    };
+    let n = cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters));
     if lane == 0 {
         counts[cl as usize] = n;
+        offsets[cl as usize] = crate::clustered::reserve_list(counters, n);
     }
 }
 

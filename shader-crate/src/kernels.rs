@@ -59,10 +59,10 @@ const fn linear<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
     Kernel::new(entry, storage_buffers, [256, 1, 1], false)
 }
 pub const PIXEL_KEYS: Kernel<FrameParams> = linear("clustered::pixel_keys", 4);
-pub const RECORD_PAGES: Kernel<FrameParams> = linear("clustered::record_pages", 3);
+pub const ALLOCATE_PAGES: Kernel<AllocatePagesParams> = Kernel::new("clustered::allocate_pages", 5, [crate::page_table::ALLOCATE_WORKGROUP, 1, 1], true);
 pub const STORE_SLOTS: Kernel<FrameParams> = linear("clustered::store_slots", 3);
 pub const COMPACT_CLUSTERS: Kernel<FrameParams> = linear("clustered::compact_clusters", 4);
-pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster_light_counts", 5);
+pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster_light_counts", 6);
 pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
 pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 13);
 pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_specular", 13);
@@ -110,7 +110,7 @@ pub const BVH_LEAVES: Kernel<BvhParams> = Kernel::new("clustered_bvh::bvh_leaves
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
 /// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
 pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 9, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 10, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
     Kernel::new("clustered_bvh::cluster_light_fill_bvh", 11, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
@@ -157,7 +157,7 @@ pub const ALL: &[Kernel<()>] = &[
     WORKGROUP_SCAN.erased(),
     DEBUG_VIEW.erased(),
     PIXEL_KEYS.erased(),
-    RECORD_PAGES.erased(),
+    ALLOCATE_PAGES.erased(),
     STORE_SLOTS.erased(),
     COMPACT_CLUSTERS.erased(),
     CLUSTER_LIGHT_COUNTS.erased(),

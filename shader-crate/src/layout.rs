@@ -319,6 +319,22 @@ pub struct ScanFixParams {
 }
 const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
 
+/// `clustered::allocate_pages`: the page table's allocation in one workgroup
+/// (`page_table::allocate_scan`): `pages` pages of the key space, `capacity` allocatable pages;
+/// it stores the count in `counters[COUNTER_PAGES]` and the compaction's dispatch (one
+/// invocation per slot of the allocated pages, `compact_per_group` per workgroup) at word
+/// `args_offset` of the arguments buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct AllocatePagesParams {
+    pub pages: u32,
+    pub capacity: u32,
+    pub compact_per_group: u32,
+    pub args_offset: u32,
+}
+const _: () = assert!(core::mem::size_of::<AllocatePagesParams>() == 16);
+
 /// `indirect_args`: `levels` dispatch argument triples for `counters[counter] · scale` items,
 /// `items_per_group · growth^l` per workgroup at level `l` (the levels of a device-wide scan),
 /// written from word `offset` of the arguments buffer (`shaders::indirect`).

@@ -26,6 +26,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
+        dispatch_times: false,
     }
 }
 

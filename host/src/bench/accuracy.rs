@@ -169,6 +169,7 @@ fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Prec
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
+        dispatch_times: false,
     }
 }
 

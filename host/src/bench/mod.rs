@@ -282,6 +282,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         sort: Default::default(),
         fp_lists: Default::default(),
         oit: Default::default(),
+        dispatch_times: false,
     }
 }
 

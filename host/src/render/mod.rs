@@ -172,6 +172,8 @@ pub struct Settings {
     pub fp_lists: forward_plus::TileLists,
     /// How transparent fragments are resolved (`--oit`; scenes with transparent materials).
     pub oit: transparent::OitVariant,
+    /// Also time every dispatch, fill and copy inside each pass (`--dispatch-times`).
+    pub dispatch_times: bool,
 }
 
 /// GPU results kept for checks and statistics.

@@ -99,6 +99,11 @@ impl Resources {
     }
 }
 
+/// Timed scopes per submission with `Settings::dispatch_times`: the passes and every dispatch,
+/// fill and copy inside them (the longest chain, `clustered-bvh` with transparency, records
+/// about 40).
+const MAX_TIMED_COMMANDS: u32 = 128;
+
 /// What a technique reports after its last frame.
 struct TechReport {
     lists: ListStats,
@@ -198,8 +203,10 @@ impl Renderer {
             across_queues: ctx.info.timestamps_across_queues,
         };
         let tech = res.technique(gpu)?;
+        // Room for every pass, and with `dispatch_times` for every command inside them.
+        let (parts, passes) = (s.dispatch_times, if s.dispatch_times { MAX_TIMED_COMMANDS } else { 16 });
         let overlapped = tech.has_async_work() && s.async_compute && ctx.async_compute_queue.is_some();
-        Ok(Self { res, tech, profiler: Profiler::new(ctx, 16)?, async_profiler: Profiler::new_async(ctx, 4)?, overlapped, regrowths: 0 })
+        Ok(Self { res, tech, profiler: Profiler::new(ctx, passes)?.with_parts(parts), async_profiler: Profiler::new_async(ctx, passes)?.with_parts(parts), overlapped, regrowths: 0 })
     }
 
     /// The settings frames are rendered with.

@@ -137,7 +137,7 @@ mod tests {
     use crate::vk::{PassTiming, Queue};
 
     fn times(ms: f64) -> FrameTimes {
-        let pass = |name: &str| PassTiming { name: name.into(), ms, queue: Queue::Main, raster: false };
+        let pass = |name: &str| PassTiming { name: name.into(), ms, queue: Queue::Main, raster: false, part: false };
         FrameTimes { passes: vec![pass("gbuffer"), pass("shading")], sample: Some(frame_time::FrameSample { frame_ms: 2.0 * ms, main_ms: 2.0 * ms, async_ms: 0.0, overlap_ms: 0.0, non_raster_ms: ms }) }
     }
 

@@ -221,8 +221,10 @@ impl Recorder<'_> {
             return self.check_bindings(pipe, buffers);
         }
         self.bind(pipe, buffers, params)?;
+        let part = self.begin_part(pipe.kernel.entry);
         unsafe { self.ctx.device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]) };
         dispatch_barrier(self.ctx, self.cmd);
+        self.end_part(part);
         Ok(())
     }
 
@@ -233,8 +235,10 @@ impl Recorder<'_> {
             return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("indirect arguments at word {offset} past the end of {}", args.name) });
         }
         self.bind(pipe, buffers, params)?;
+        let part = self.begin_part(pipe.kernel.entry);
         unsafe { self.ctx.device.cmd_dispatch_indirect(self.cmd, args.raw, 4 * offset as u64) };
         dispatch_barrier(self.ctx, self.cmd);
+        self.end_part(part);
         Ok(())
     }
 
@@ -316,8 +320,10 @@ impl Recorder<'_> {
 
     /// Fills the first `bytes` of a buffer with a repeated `u32` and makes it visible to kernels.
     pub fn fill(&mut self, buffer: &Buffer, value: u32) {
+        let part = self.begin_part("fill");
         unsafe { self.ctx.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, buffer.size, value) };
         barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+        self.end_part(part);
     }
 
     /// Copies the first `bytes` of `src` into `dst` and makes them visible to kernels and copies.
@@ -328,8 +334,10 @@ impl Recorder<'_> {
         }
         if bytes > 0 {
             let region = vk::BufferCopy::default().size(bytes);
+            let part = self.begin_part("copy");
             unsafe { self.ctx.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]) };
             barrier(self.ctx, self.cmd, vk::AccessFlags::TRANSFER_WRITE, vk::PipelineStageFlags::TRANSFER);
+            self.end_part(part);
         }
         Ok(())
     }
@@ -338,6 +346,19 @@ impl Recorder<'_> {
     pub(crate) fn mark_raster(&mut self) {
         if let Some(p) = self.profiler.as_mut() {
             p.mark_raster();
+        }
+    }
+
+    /// Starts timing one command as a part of the open pass (profilers that time parts).
+    fn begin_part(&mut self, command: &str) -> Option<u32> {
+        let cmd = self.cmd;
+        self.profiler.as_mut().and_then(|p| p.begin_part(cmd, command))
+    }
+
+    fn end_part(&mut self, part: Option<u32>) {
+        let cmd = self.cmd;
+        if let Some(p) = self.profiler.as_mut() {
+            p.end_part(cmd, part);
         }
     }
 

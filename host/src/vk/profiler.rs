@@ -28,6 +28,9 @@ pub struct PassTiming {
     pub queue: Queue,
     /// The pass recorded raster work (it began rendering).
     pub raster: bool,
+    /// One dispatch, fill or copy inside the pass named before ` · ` (profilers with
+    /// [`Profiler::with_parts`]); its time is also inside the pass's.
+    pub part: bool,
 }
 
 pub struct Profiler {
@@ -40,8 +43,12 @@ pub struct Profiler {
     names: Vec<String>,
     /// Per pass: whether it recorded raster work.
     raster: Vec<bool>,
+    /// Per pass: whether it is one command inside a pass.
+    part: Vec<bool>,
     /// The pass being recorded.
     open: Option<usize>,
+    /// Time each dispatch, fill and copy inside a pass as well ([`Profiler::with_parts`]).
+    parts: bool,
 }
 
 impl Profiler {
@@ -63,7 +70,20 @@ impl Profiler {
             pool = unsafe { ctx.device.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
             ctx.set_name(pool, "profiler timestamps");
         }
-        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, bits, queue, names: Vec::new(), raster: Vec::new(), open: None })
+        Ok(Self { ctx: ctx.clone(), pool, capacity: passes, bits, queue, names: Vec::new(), raster: Vec::new(), part: Vec::new(), open: None, parts: false })
+    }
+
+    /// This profiler, also timing every dispatch, fill and copy inside a pass as a part named
+    /// `pass · command` (the commands' own timestamps: where a pass's time goes). Its capacity
+    /// must cover the parts too.
+    pub fn with_parts(mut self, parts: bool) -> Self {
+        self.parts = parts;
+        self
+    }
+
+    /// Whether commands inside a pass are timed as parts.
+    pub fn times_parts(&self) -> bool {
+        self.parts && self.enabled()
     }
 
     pub fn enabled(&self) -> bool {
@@ -74,6 +94,7 @@ impl Profiler {
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.names.clear();
         self.raster.clear();
+        self.part.clear();
         self.open = None;
         if self.enabled() {
             unsafe { self.ctx.device.cmd_reset_query_pool(cmd, self.pool, 0, 2 * self.capacity) };
@@ -82,19 +103,43 @@ impl Profiler {
 
     /// Starts a pass; returns its slot (None when disabled or full).
     pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Option<u32> {
+        let slot = self.start(cmd, name, false)?;
+        self.open = Some(slot as usize);
+        Some(slot)
+    }
+
+    /// Starts a part (a command inside the open pass `pass`) when parts are timed.
+    pub fn begin_part(&mut self, cmd: vk::CommandBuffer, command: &str) -> Option<u32> {
+        let pass = self.open.filter(|_| self.parts).map(|i| self.names[i].clone())?;
+        // The n-th use of a kernel in a pass is `pass · kernel #n`: names stay keys.
+        let name = format!("{pass} · {command}");
+        let n = self.names.iter().filter(|m| **m == name || m.strip_prefix(name.as_str()).is_some_and(|r| r.starts_with(" #"))).count();
+        self.start(cmd, &if n == 0 { name.clone() } else { format!("{name} #{}", n + 1) }, true)
+    }
+
+    fn start(&mut self, cmd: vk::CommandBuffer, name: &str, part: bool) -> Option<u32> {
         if !self.enabled() || self.names.len() as u32 >= self.capacity {
             return None;
         }
         let slot = self.names.len() as u32;
         self.names.push(name.to_owned());
         self.raster.push(false);
-        self.open = Some(slot as usize);
+        self.part.push(part);
         unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.pool, 2 * slot) };
         Some(slot)
     }
 
+    /// Ends a part [`Profiler::begin_part`] started.
+    pub fn end_part(&mut self, cmd: vk::CommandBuffer, slot: Option<u32>) {
+        self.write_end(cmd, slot);
+    }
+
     pub fn end(&mut self, cmd: vk::CommandBuffer, slot: Option<u32>) {
         self.open = None;
+        self.write_end(cmd, slot);
+    }
+
+    fn write_end(&mut self, cmd: vk::CommandBuffer, slot: Option<u32>) {
         if let Some(s) = slot {
             unsafe { self.ctx.device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.pool, 2 * s + 1) };
         }
@@ -149,7 +194,7 @@ impl Profiler {
             .take(raw.len() / 2)
             .map(|(i, n)| {
                 let ticks = raw[2 * i + 1].wrapping_sub(raw[2 * i]) & mask;
-                PassTiming { name: n.clone(), ms: ticks as f64 * period, queue: self.queue, raster: self.raster[i] }
+                PassTiming { name: n.clone(), ms: ticks as f64 * period, queue: self.queue, raster: self.raster[i], part: self.part[i] }
             })
             .collect();
         let span = raw.first().map(|&start| {
