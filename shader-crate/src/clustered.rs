@@ -6,7 +6,8 @@
 //! pure function)
 //!
 //! 1–5. **Unique clusters** — [`pixel_keys`] (keys, and the marks of their pages),
-//!    [`allocate_pages`], [`store_slots`], (scan) [`compact_clusters`]: the page table of
+//!    [`allocate_pages`], [`store_slots`], [`count_page_slots`], [`scan_page_counts`],
+//!    [`compact_page_slots`]: the page table of
 //!    [`crate::page_table`] (steps and memory there). Each mark and slot is cleared by its last
 //!    reader, so no frame clears the tables at their capacity.
 //! 6–7. **Naive assignment** — [`cluster_light_counts`] (and each list's place: [`reserve_list`]),
@@ -17,10 +18,12 @@
 //!    page → slot → cluster → its list, through [`shading::shade_lights`].
 //!
 //! **Memory**: the page table's (see [`crate::page_table`]), counts and offsets 4 B per unique
-//! cluster, 4 B per light reference; no workgroup memory.
+//! cluster, 4 B per light reference; the page-table kernels use the scan's workgroup memory
+//! (`scan::SCAN_SHARED_WORDS` words).
 // Entry points take one parameter per built-in and binding.
 #![allow(clippy::too_many_arguments)]
 
+use crate::coop::gpu::GpuCoop;
 use crate::layout::*;
 use crate::light_lists::{lights_meeting, lights_meeting_spots};
 use crate::light_types::{box_sphere, EFFECT_SPOT};
@@ -61,7 +64,7 @@ pub fn pixel_keys(
 
 /// 3. Allocate the marked pages in one workgroup (`page_table::allocate_scan`,
 /// `page_table::allocate_run`): page table, pages of the allocation, marks cleared, the page
-/// count, the compaction's indirect dispatch, and the light-reference counter zeroed.
+/// count, a dispatch of one workgroup per allocated page, and the light-reference counter zeroed.
 #[spirv(compute(threads(256)))] // page_table::ALLOCATE_WORKGROUP
 pub fn allocate_pages(
     #[spirv(local_invocation_index)] local_index: u32,
@@ -69,7 +72,7 @@ pub fn allocate_pages(
     #[spirv(subgroup_local_invocation_id)] lane: u32,
     #[spirv(subgroup_id)] subgroup_id: u32,
     #[spirv(num_subgroups)] num_subgroups: u32,
-    #[spirv(push_constant)] p: &AllocatePagesParams,
+    #[spirv(push_constant)] p: &PageTableParams,
     #[spirv(workgroup)] shared: &mut [u32; crate::scan::SCAN_SHARED_WORDS],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] marks: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_base: &mut [u32],
@@ -77,7 +80,7 @@ pub fn allocate_pages(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] counters: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] args: &mut [u32],
 ) {
-    let c = crate::coop::gpu::GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let (base, total) = page_table::allocate_scan(&c, shared, p.pages, marks);
     page_table::allocate_run(p.pages, local_index, base, p.capacity, marks, page_base, page_of_alloc);
     if local_index == 0 {
@@ -85,12 +88,24 @@ pub fn allocate_pages(
         // The frame's other counters are stored whole by their passes; the light references
         // are summed by atomics (`reserve_list`) and start here, so no pass clears the counters.
         counters[COUNTER_LIGHT_REFS as usize] = 0;
-        let a = crate::indirect::dispatch_args(crate::indirect::saturating_mul(total, PAGE_SIZE), p.compact_per_group);
-        let o = p.args_offset as usize;
-        args[o] = a[0];
-        args[o + 1] = a[1];
-        args[o + 2] = a[2];
+        let allocated = if total < p.capacity { total } else { p.capacity };
+        store_args(args, p.args_offset, crate::indirect::dispatch_args(allocated, 1));
     }
+}
+
+/// Writes a `VkDispatchIndirectCommand` at word `offset`.
+#[inline]
+fn store_args(args: &mut [u32], offset: u32, a: [u32; 3]) {
+    let o = offset as usize;
+    args[o] = a[0];
+    args[o + 1] = a[1];
+    args[o + 2] = a[2];
+}
+
+/// The allocated page a page-table workgroup takes (2D-folded dispatches).
+#[inline]
+fn page_of_group(wg: UVec3, nwg: UVec3) -> u32 {
+    wg.y * nwg.x + wg.x
 }
 
 /// 4. Flag each pixel's key in its page.
@@ -119,23 +134,96 @@ pub fn store_slots(
     }
 }
 
-/// 5. Scatter the set slots (after their scan) into the sorted unique-cluster list.
-#[spirv(compute(threads(256)))]
-pub fn compact_clusters(
+/// 5a. The set slots of each allocated page (one workgroup per page, `page_table::page_slot_scan`).
+#[spirv(compute(threads(256)))] // page_table::ALLOCATE_WORKGROUP
+pub fn count_page_slots(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] p: &FrameParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slots: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] slot_rank: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] page_of_alloc: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] unique: &mut [u32],
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(workgroup)] shared: &mut [u32; crate::scan::SCAN_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slots: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_counts: &mut [u32],
 ) {
-    let s = linear_index(wg, nwg, local);
-    if s < p.count && slots[s as usize] != 0 {
-        unique[slot_rank[s as usize] as usize] = page_table::key_of_slot(page_of_alloc, s);
-        // The slot's last reader: cleared for the next frame (the frame's allocated pages only).
-        slots[s as usize] = 0;
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let page = page_of_group(wg, nwg);
+    let (_, set) = page_table::page_slot_scan(&c, shared, slots, page);
+    if local_index == 0 {
+        page_counts[page as usize] = set;
+    }
+}
+
+/// 5b. The allocated pages' slot counts scanned in one workgroup (`page_table::run_scan`): each
+/// page's first rank, the unique clusters, the assignment's dispatch and the staged lists' stride.
+#[spirv(compute(threads(256)))] // page_table::ALLOCATE_WORKGROUP
+pub fn scan_page_counts(
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &PageTableParams,
+    #[spirv(workgroup)] shared: &mut [u32; crate::scan::SCAN_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] page_counts: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_offsets: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] counters: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] args: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let pages = counters[COUNTER_PAGES as usize];
+    let n = if pages < p.capacity { pages } else { p.capacity };
+    let (base, total) = page_table::run_scan(&c, shared, n, |i| page_counts[i as usize]);
+    let (start, end) = page_table::run_span(n, local_index);
+    let mut next = base;
+    let mut i = start;
+    while i < end {
+        page_offsets[i as usize] = next;
+        next += page_counts[i as usize];
+        i += 1;
+    }
+    if local_index == 0 {
+        counters[COUNTER_UNIQUE_CLUSTERS as usize] = total;
+        counters[COUNTER_STAGE_STRIDE as usize] = crate::clustered_bvh::stage_stride(p.stage_words, total);
+        store_args(args, p.args_offset, crate::indirect::dispatch_args(total, p.per_group));
+    }
+}
+
+/// 5c. Each allocated page's set slots ranked from its offset (one workgroup per page, two slots
+/// per invocation, `page_table::page_slot_scan`) and scattered into the sorted unique-cluster
+/// list; each slot cleared (its last reader).
+#[spirv(compute(threads(256)))] // page_table::ALLOCATE_WORKGROUP
+pub fn compact_page_slots(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(num_workgroups)] nwg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(workgroup)] shared: &mut [u32; crate::scan::SCAN_SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] slots: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] page_offsets: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] page_of_alloc: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] slot_rank: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] unique: &mut [u32],
+) {
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let page = page_of_group(wg, nwg);
+    let (before, _) = page_table::page_slot_scan(&c, shared, slots, page);
+    let first = page_table::slot_pair(page, local_index);
+    let mut rank = page_offsets[page as usize] + before;
+    let mut s = first;
+    while s < first + 2 {
+        if slots[s as usize] != 0 {
+            slot_rank[s as usize] = rank;
+            unique[rank as usize] = page_table::key_of_slot(page_of_alloc, s);
+            slots[s as usize] = 0;
+            rank += 1;
+        }
+        s += 1;
     }
 }
 

@@ -108,42 +108,55 @@ pub fn cluster_lights_bvh<C: Coop>(
     light_bvh::walk_subgroup(c, nodes, spheres, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), f.effects, lights, emit)
 }
 
-/// Lights per cluster that the counting walk also stores (the fill pass then copies them instead
-/// of walking again; longer lists are walked twice). H200, Sponza 1080p, assignment at 10k / 1M
-/// lights: 0.211 / 0.507 ms with 32, 0.158 / 0.447 with 64 (0.260 / 0.567 walking twice).
+/// The staged lists: the counting walk also stores each cluster's lights, and the fill pass
+/// copies every list that fits instead of walking the tree again (longer lists are walked
+/// twice). The buffer's words are shared out among the frame's unique clusters
+/// ([`stage_stride`]), so a frame with few clusters stages long lists: on the H200 (Sponza
+/// 1080p, 6 732 clusters, 16 MiB) every list up to 1 024 lights, where 64 per cluster left the
+/// fill pass re-walking most clusters at 1M lights (0.165 ms of its 0.404 ms assignment).
+/// Lights each cluster's stage holds at most: a 2 000-light cluster still walks twice (the
+/// path the tests keep exercised).
+pub const MAX_STAGE_STRIDE: u32 = 1024;
+/// Lights per cluster the stage is sized for (`STAGED_CLUSTERS` clusters of this many words).
 pub const STAGED_LIGHTS: u32 = 64;
-/// Most clusters of a frame that stage their lists (`STAGED_LIGHTS` words each: 16 MiB); the
-/// host stages `min(this, its cluster capacity)` (`BvhAssignParams::staged_clusters`), the
-/// rest walk twice. A 1080p Sponza frame has about 7k unique clusters.
+/// Clusters the stage is sized for: the host allocates `min(this, its cluster capacity) ·
+/// STAGED_LIGHTS` words (16 MiB at most). A 1080p Sponza frame has about 7k unique clusters.
 pub const STAGED_CLUSTERS: u32 = 1 << 16;
 
-/// Whether cluster `cl` with `count` lights has its whole list staged (`staged_clusters` of the
-/// frame stage).
+/// Words of the stage per cluster for `clusters` unique clusters sharing `words`: at most
+/// [`MAX_STAGE_STRIDE`] (0 without a stage).
 #[inline]
-pub fn staged(cl: u32, count: u32, staged_clusters: u32) -> bool {
-    cl < staged_clusters && count <= STAGED_LIGHTS
+pub fn stage_stride(words: u32, clusters: u32) -> u32 {
+    let s = words.checked_div(clusters).unwrap_or(0);
+    if s < MAX_STAGE_STRIDE { s } else { MAX_STAGE_STRIDE }
+}
+
+/// Whether cluster `cl` with `count` lights has its whole list staged (`stride` words each).
+#[inline]
+pub fn staged(count: u32, stride: u32) -> bool {
+    count <= stride
 }
 
 /// Stores light `light` of cluster `cl`'s list at slot `k` of its stage, where it fits.
 #[inline]
-pub fn stage(stage: &mut [u32], cl: u32, k: u32, light: u32, staged_clusters: u32) {
-    if cl < staged_clusters && k < STAGED_LIGHTS {
-        stage[(cl * STAGED_LIGHTS + k) as usize] = light;
+pub fn stage(stage: &mut [u32], cl: u32, k: u32, light: u32, stride: u32) {
+    if k < stride {
+        stage[(cl * stride + k) as usize] = light;
     }
 }
 
 /// Step 3, pass 2 for a staged cluster: its `count` lights copied to `list[base..]`, lane by lane.
 #[inline]
-pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, base: u32, mut store: impl FnMut(u32, u32)) {
+pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, stride: u32, base: u32, mut store: impl FnMut(u32, u32)) {
     let mut i = c.lane();
     while i < count {
-        store(base + i, stage[(cl * STAGED_LIGHTS + i) as usize]);
+        store(base + i, stage[(cl * stride + i) as usize]);
         i += c.subgroup_size();
     }
 }
 
-/// Step 3, pass 1: lights per unique cluster (one subgroup each), the first [`STAGED_LIGHTS`] of
-/// each of the first `p.staged_clusters` clusters stored in `staged_lists`.
+/// Step 3, pass 1: lights per unique cluster (one subgroup each), the first
+/// `counters[COUNTER_STAGE_STRIDE]` of each stored in `staged_lists`, and the list's place.
 #[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
 pub fn cluster_light_counts_bvh(
@@ -173,7 +186,8 @@ pub fn cluster_light_counts_bvh(
     if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }
-    let n = cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, p.staged_clusters));
+    let stride = counters[COUNTER_STAGE_STRIDE as usize];
+    let n = cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, stride));
     if lane == 0 {
         counts[cl as usize] = n;
         offsets[cl as usize] = crate::clustered::reserve_list(counters, n);
@@ -217,9 +231,35 @@ pub fn cluster_light_fill_bvh(
     }
     let base = offsets[cl as usize];
     let count = counts[cl as usize];
-    if staged(cl, count, p.staged_clusters) {
-        copy_staged(&c, staged_lists, cl, count, base, |i, l| list[i as usize] = l);
+    let stride = counters[COUNTER_STAGE_STRIDE as usize];
+    if staged(count, stride) {
+        copy_staged(&c, staged_lists, cl, count, stride, base, |i, l| list[i as usize] = l);
     } else {
         cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stage's words are shared out among the frame's clusters, capped per cluster; a frame
+    /// with more clusters than words, or none, stages nothing.
+    #[test]
+    fn the_stage_is_shared_out_among_the_frames_clusters() {
+        let words = STAGED_CLUSTERS * STAGED_LIGHTS;
+        assert_eq!(stage_stride(words, 6732), 623);
+        assert_eq!(stage_stride(words, 25_255), 166);
+        assert_eq!(stage_stride(words, 100), MAX_STAGE_STRIDE);
+        assert_eq!(stage_stride(words, STAGED_CLUSTERS), STAGED_LIGHTS);
+        assert_eq!(stage_stride(words, words + 1), 0);
+        assert_eq!(stage_stride(words, 0), 0);
+        assert_eq!(stage_stride(0, 10), 0);
+        // Every cluster's stage lies inside the buffer.
+        for clusters in [1, 7, 6732, 65_536, 1 << 20] {
+            let s = stage_stride(words, clusters);
+            assert!(clusters as u64 * s as u64 <= words as u64, "{clusters} clusters");
+            assert!(staged(s, s) && !staged(s + 1, s));
+        }
     }
 }

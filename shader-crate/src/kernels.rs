@@ -59,9 +59,12 @@ const fn linear<P>(entry: &'static str, storage_buffers: u32) -> Kernel<P> {
     Kernel::new(entry, storage_buffers, [256, 1, 1], false)
 }
 pub const PIXEL_KEYS: Kernel<FrameParams> = linear("clustered::pixel_keys", 4);
-pub const ALLOCATE_PAGES: Kernel<AllocatePagesParams> = Kernel::new("clustered::allocate_pages", 5, [crate::page_table::ALLOCATE_WORKGROUP, 1, 1], true);
+const PAGE_WORKGROUP: [u32; 3] = [crate::page_table::ALLOCATE_WORKGROUP, 1, 1];
+pub const ALLOCATE_PAGES: Kernel<PageTableParams> = Kernel::new("clustered::allocate_pages", 5, PAGE_WORKGROUP, true);
+pub const COUNT_PAGE_SLOTS: Kernel<()> = Kernel::new("clustered::count_page_slots", 2, PAGE_WORKGROUP, true);
+pub const SCAN_PAGE_COUNTS: Kernel<PageTableParams> = Kernel::new("clustered::scan_page_counts", 4, PAGE_WORKGROUP, true);
+pub const COMPACT_PAGE_SLOTS: Kernel<()> = Kernel::new("clustered::compact_page_slots", 5, PAGE_WORKGROUP, true);
 pub const STORE_SLOTS: Kernel<FrameParams> = linear("clustered::store_slots", 3);
-pub const COMPACT_CLUSTERS: Kernel<FrameParams> = linear("clustered::compact_clusters", 4);
 pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster_light_counts", 6);
 pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
 pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 13);
@@ -159,7 +162,9 @@ pub const ALL: &[Kernel<()>] = &[
     PIXEL_KEYS.erased(),
     ALLOCATE_PAGES.erased(),
     STORE_SLOTS.erased(),
-    COMPACT_CLUSTERS.erased(),
+    COUNT_PAGE_SLOTS.erased(),
+    SCAN_PAGE_COUNTS.erased(),
+    COMPACT_PAGE_SLOTS.erased(),
     CLUSTER_LIGHT_COUNTS.erased(),
     CLUSTER_LIGHT_FILL.erased(),
     SHADE_CLUSTERED_DIFFUSE.erased(),

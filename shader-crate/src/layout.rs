@@ -305,6 +305,9 @@ impl View {
 pub const COUNTER_UNIQUE_CLUSTERS: u32 = 0;
 pub const COUNTER_LIGHT_REFS: u32 = 1;
 pub const COUNTER_PAGES: u32 = 2;
+/// `clustered-bvh`: words of the staged light lists per unique cluster this frame
+/// (`clustered_bvh::stage_stride`), stored by the page table's scan.
+pub const COUNTER_STAGE_STRIDE: u32 = 3;
 pub const COUNTERS: u32 = 4;
 
 /// `add_offsets` / `store_total` kernels of the device-wide scan.
@@ -319,21 +322,26 @@ pub struct ScanFixParams {
 }
 const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
 
-/// `clustered::allocate_pages`: the page table's allocation in one workgroup
-/// (`page_table::allocate_scan`): `pages` pages of the key space, `capacity` allocatable pages;
-/// it stores the count in `counters[COUNTER_PAGES]` and the compaction's dispatch (one
-/// invocation per slot of the allocated pages, `compact_per_group` per workgroup) at word
-/// `args_offset` of the arguments buffer.
+/// The page table's one-workgroup kernels (`page_table`): `clustered::allocate_pages` allocates
+/// the marked ones of `pages` pages of the key space, at most `capacity`, and stores the count of
+/// allocated pages in `counters[COUNTER_PAGES]` and a dispatch of one workgroup per allocated
+/// page at word `args_offset` of the arguments buffer; `clustered::scan_page_counts` scans the
+/// allocated pages' slot counts, stores the unique clusters in
+/// `counters[COUNTER_UNIQUE_CLUSTERS]`, the assignment's dispatch (`per_group` clusters per
+/// workgroup) at word `args_offset`, and the staged lists' stride for `stage_words` words
+/// (`clustered_bvh::stage_stride`; 0 without staged lists) in `counters[COUNTER_STAGE_STRIDE]`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
-pub struct AllocatePagesParams {
+pub struct PageTableParams {
     pub pages: u32,
     pub capacity: u32,
-    pub compact_per_group: u32,
+    pub per_group: u32,
     pub args_offset: u32,
+    pub stage_words: u32,
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(core::mem::size_of::<AllocatePagesParams>() == 16);
+const _: () = assert!(core::mem::size_of::<PageTableParams>() == 32);
 
 /// `indirect_args`: `levels` dispatch argument triples for `counters[counter] · scale` items,
 /// `items_per_group · growth^l` per workgroup at level `l` (the levels of a device-wide scan),
@@ -418,10 +426,7 @@ pub struct BvhAssignParams {
     pub frame: FrameParams,
     /// Children per node of the light BVH (32 or 64).
     pub branching: u32,
-    /// Clusters `0..staged_clusters` stage their lists (`clustered_bvh::STAGED_LIGHTS` words
-    /// each) in the counting walk; 0 stages none.
-    pub staged_clusters: u32,
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);

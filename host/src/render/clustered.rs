@@ -5,12 +5,13 @@
 //! 2. **keys** — cluster key per pixel, and its page's mark (`clustered::pixel_keys`): 32 px
 //!    tiles × exponential depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
 //! 3. **page table** — (pages marked with the keys) allocate in one workgroup (a scan of the
-//!    marks) → store slots → scan → compact into the sorted unique-cluster list (`page_table`;
-//!    one workgroup instead of a device-wide scan and a record pass: 5 fewer dependent
-//!    dispatches, on the H200 about 6 µs each). Allocation is sized from
-//!    the resolution; the slot scan and the compaction cover the pages the frame allocated
-//!    (indirect dispatches from the GPU's page counter, `scan::DeviceScan::record_counted`).
-//!    Marks and slots are cleared by their last readers, never at capacity.
+//!    marks) → store slots → per allocated page count its set slots → scan those counts in one
+//!    workgroup → per page rank and compact its slots into the sorted unique-cluster list
+//!    (`page_table`). Five dispatches, two of them one workgroup; device-wide scans of the marks
+//!    and of the slots took twelve, on the H200 about 6 µs each whatever their size. Allocation
+//!    is sized from the resolution; the per-page passes cover the pages the frame allocated
+//!    (indirect dispatches that the allocation writes). Marks and slots are cleared by their
+//!    last readers, never at capacity.
 //! 4. **assignment** — per unique cluster, its lights counted and its list's place reserved with
 //!    one atomic add (`shaders::clustered::reserve_list`), then filled; offsets + counts give
 //!    each cluster's list. Both run for the frame's unique clusters (indirect dispatches from the
@@ -18,10 +19,11 @@
 //!    placed the lists before: seven dependent dispatches, 0.05 ms on the H200.)
 //!    `clustered-naive` tests every light against the cluster's AABB; `clustered-bvh` walks the
 //!    light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node boxes, on the
-//!    async-compute queue, overlapping the G-buffer raster). Its counting walk also stages the
-//!    first `STAGED_LIGHTS` = 64 lights of each cluster, so the fill copies every list that fits
-//!    instead of walking again (H200, Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms;
-//!    0.211 with 32 staged).
+//!    async-compute queue, overlapping the G-buffer raster). Its counting walk also stages each
+//!    cluster's lights, so the fill copies every list that fits instead of walking again (H200,
+//!    Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms with 64 staged per cluster). The
+//!    stage's words are shared out among the frame's clusters (`clustered_bvh::stage_stride`,
+//!    stored by the page table's scan: up to 1 024 lights each).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //! 6. **transparency** (scenes with transparent draws, `transparent.rs`): inside steps 2 and 3 a
 //!    raster pre-pass of the transparent draws marks their fragments' pages, then slots, so
@@ -31,11 +33,11 @@
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs.
 //!
 //! Memory: 4 B per pixel (keys); 4 B per page of the key space ×2 (marks, page table); 8 B per
-//! slot (512 slots per touched page); 12 B per unique cluster (list, counts, offsets); 4 B per
-//! light reference; scan scratch ≈ 1/128 of what it scans; the BVH (`bvh.rs`); `clustered-bvh`'s
-//! staged lists, 256 B per cluster for up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB).
+//! slot (512 slots per touched page) and 12 B per allocatable page (its key-space page, slot
+//! count and offset); 12 B per unique cluster (list, counts, offsets); 4 B per light reference;
+//! the BVH (`bvh.rs`); `clustered-bvh`'s staged lists, 256 B per cluster of the capacity for
+//! up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB), shared out among the frame's clusters.
 use super::bvh::LightBvh;
-use super::scan::{Counted, DeviceScan};
 use super::technique::{grew_together, grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
@@ -181,7 +183,7 @@ impl Capacities {
 }
 
 /// Word offsets of the indirect dispatches in `ClusterBuffers::dispatch_args`.
-const ARGS_COMPACT: u32 = 0;
+const ARGS_PAGES: u32 = 0;
 const ARGS_ASSIGNMENT: u32 = 3;
 
 struct ClusterBuffers {
@@ -200,13 +202,16 @@ struct ClusterBuffers {
     pub list: Buffer,
     pub counters: Buffer,
     /// `clustered-bvh`: the lists the counting walk stages (`shaders::clustered_bvh::stage`) for
-    /// the first `staged_clusters` clusters, copied by the fill pass instead of a second walk.
+    /// the frame's clusters (`stage_words` words shared out among them), copied by the fill pass
+    /// instead of a second walk.
     staged: Option<Buffer>,
-    staged_clusters: u32,
+    stage_words: u32,
     /// Workgroup counts written on the GPU from its counters (`VkDispatchIndirectCommand`s):
-    /// [`ARGS_COMPACT`] for the allocated slots, [`ARGS_ASSIGNMENT`] for the unique clusters.
+    /// [`ARGS_PAGES`] one per allocated page, [`ARGS_ASSIGNMENT`] for the unique clusters.
     dispatch_args: Buffer,
-    slot_scan: DeviceScan,
+    /// Set slots per allocated page, and their exclusive scan (`page_table` step 5).
+    page_counts: Buffer,
+    page_offsets: Buffer,
 }
 
 impl ClusterBuffers {
@@ -227,13 +232,13 @@ impl ClusterBuffers {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::zeroed(ctx, name, 4 * n as u64)
         };
-        let staged_clusters = if staged { max_clusters.min(STAGED_CLUSTERS) } else { 0 };
+        let stage_words = if staged { max_clusters.min(STAGED_CLUSTERS) * STAGED_LIGHTS } else { 0 };
         Ok(Self {
             caps,
             page_count: pages,
             max_clusters,
-            staged: if staged { Some(words("staged light lists", staged_clusters * STAGED_LIGHTS)?) } else { None },
-            staged_clusters,
+            staged: if staged { Some(words("staged light lists", stage_words)?) } else { None },
+            stage_words,
             keys: words("cluster keys", pixels)?,
             marks: zeroed("page marks", pages)?,
             page_base: words("page table", pages)?,
@@ -246,7 +251,8 @@ impl ClusterBuffers {
             list: words("light lists", caps.light_refs)?,
             counters: words("counters", COUNTERS)?,
             dispatch_args: words("indirect dispatches", 6)?,
-            slot_scan: DeviceScan::new(gpu, "slots", slots)?,
+            page_counts: words("page slot counts", caps.pages)?,
+            page_offsets: words("page slot offsets", caps.pages)?,
         })
     }
 
@@ -254,11 +260,9 @@ impl ClusterBuffers {
     pub fn sizes(&self) -> Vec<(String, u64)> {
         let b = [
             &self.keys, &self.marks, &self.page_base, &self.page_of_alloc, &self.slots, &self.slot_rank, &self.unique,
-            &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args,
+            &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args, &self.page_counts, &self.page_offsets,
         ];
-        let mut v: Vec<(String, u64)> = b.into_iter().chain(self.staged.as_ref()).map(|b| (b.name.clone(), b.size)).collect();
-        v.push(("scan scratch".into(), self.slot_scan.bytes()));
-        v
+        b.into_iter().chain(self.staged.as_ref()).map(|b| (b.name.clone(), b.size)).collect()
     }
 
     /// Records steps 2–5 (keys … shading) of the clustered chain. With `bvh`, the assignment
@@ -278,7 +282,7 @@ impl ClusterBuffers {
         let n = p.count;
         let with = |count: u32| FrameParams { count, ..*p };
         // Marks and slots are zero at allocation and cleared by their last readers
-        // (`allocate_pages`, `compact_clusters`): no fill at their capacity.
+        // (`allocate_pages`, `compact_page_slots`): no fill at their capacity.
         // The counters are stored whole by the passes that count (the light references start
         // at 0 in `allocate_pages`): no fill.
         rec.pass("keys", |rec| {
@@ -291,34 +295,34 @@ impl ClusterBuffers {
                 None => Ok(()),
             }
         })?;
+        // The assignment's workgroups (for the frame's unique clusters, not for the buffers'
+        // capacity): sized by the page table's scan.
+        let c = with(self.max_clusters);
+        let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
+        let per_group = match walk {
+            None => shaders::kernels::CLUSTER_LIGHT_COUNTS.invocations(),
+            Some(_) => rec.subgroup_items_per_group(k.cluster_light_counts_bvh.get(c.effects)?),
+        };
         rec.pass("page table", |rec| {
-            // One workgroup allocates the marked pages and sizes the compaction's dispatch.
-            let compact_per_group = k.compact_clusters.kernel.invocations();
-            let a = AllocatePagesParams { pages: self.page_count, capacity: self.caps.pages, compact_per_group, args_offset: ARGS_COMPACT };
+            // One workgroup allocates the marked pages (and sizes the per-page dispatches).
+            let a = PageTableParams { pages: self.page_count, capacity: self.caps.pages, per_group: 1, args_offset: ARGS_PAGES, stage_words: 0, _pad: [0; 3] };
             rec.dispatch(&k.allocate_pages, &[&self.marks, &self.page_base, &self.page_of_alloc, &self.counters, &self.dispatch_args], &a, [1, 1, 1])?;
             rec.dispatch_linear(&k.store_slots, &[&self.keys, &self.page_base, &self.slots], p, n)?;
             if let Some(t) = transparency {
                 let m = Marks { stage: TRANSPARENT_STORE_SLOTS, marks: &self.marks, page_table: Some((&self.page_base, &self.slots)) };
                 t.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, &m)?;
             }
-            // The slots of the allocated pages only: scanned and compacted for the pages counted.
-            let allocated = Counted { counter: COUNTER_PAGES, scale: PAGE_SIZE };
-            self.slot_scan.record_counted(gpu, rec, &self.slots, &self.slot_rank, &self.counters, allocated, Some(COUNTER_UNIQUE_CLUSTERS))?;
-            let slots = self.caps.slots();
-            rec.dispatch_indirect(&k.compact_clusters, &[&self.slots, &self.slot_rank, &self.page_of_alloc, &self.unique], &with(slots), &self.dispatch_args, ARGS_COMPACT)
-        })?;
-        let c = with(self.max_clusters);
-        rec.pass("assignment", |rec| {
-            // Workgroups for the frame's unique clusters, not for the buffers' capacity.
+            // The allocated pages' slots: counted per page, the counts scanned in one
+            // workgroup, the slots ranked and compacted per page.
             let args = &self.dispatch_args;
-            let staged_clusters = self.staged_clusters;
-            let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, staged_clusters, _pad: [0; 2] }));
-            let per_group = match walk {
-                None => shaders::kernels::CLUSTER_LIGHT_COUNTS.invocations(),
-                Some(_) => rec.subgroup_items_per_group(k.cluster_light_counts_bvh.get(c.effects)?),
-            };
-            let p = IndirectParams::one(COUNTER_UNIQUE_CLUSTERS, 1, per_group, ARGS_ASSIGNMENT);
-            rec.indirect_args(&k.indirect_args, &self.counters, args, &p)?;
+            rec.dispatch_indirect(&k.count_page_slots, &[&self.slots, &self.page_counts], &(), args, ARGS_PAGES)?;
+            let s = PageTableParams { pages: self.page_count, capacity: self.caps.pages, per_group, args_offset: ARGS_ASSIGNMENT, stage_words: self.stage_words, _pad: [0; 3] };
+            rec.dispatch(&k.scan_page_counts, &[&self.page_counts, &self.page_offsets, &self.counters, args], &s, [1, 1, 1])?;
+            let compact = [&self.slots, &self.page_offsets, &self.page_of_alloc, &self.slot_rank, &self.unique];
+            rec.dispatch_indirect(&k.compact_page_slots, &compact, &(), args, ARGS_PAGES)
+        })?;
+        rec.pass("assignment", |rec| {
+            let args = &self.dispatch_args;
             match walk {
                 None => rec.dispatch_indirect(
                     k.cluster_light_counts.get(c.effects)?,
