@@ -10,8 +10,8 @@
 //!    each fragment marks what the technique's lists (`TransparentDraw::lists`) are built from:
 //!    * page table (`clustered-naive`, `clustered-bvh`), two passes: the cluster key of the
 //!      opaque key kernel's function ([`page_table::pixel_key`], from its own depth) marks its
-//!      page (beside the key kernel's marks, before the page scan), then — after the pages are
-//!      allocated — sets its slot (beside `store_slots`, before the slot scan and compaction);
+//!      page (beside the key kernel's marks, before the pages are allocated), then — after
+//!      that — sets its slot (beside `store_slots`, before the slots are counted and compacted);
 //!    * dense grid (`clustered-aabb`): its dense cluster's flag, beside `aabb_mark`'s;
 //!    * tiles (`forward-plus`): its tile's transparent depth range, which the culling's tile
 //!      bounds then span.

@@ -309,8 +309,9 @@ impl Transparency {
         Ok(())
     }
 
-    /// Step 1: the page table's `TRANSPARENT_MARK_PAGES` (after the key kernel, before the page
-    /// scan) and `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slot scan); the dense
+    /// Step 1: the page table's `TRANSPARENT_MARK_PAGES` (after the key kernel, before the pages
+    /// are allocated) and `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slots are
+    /// counted); the dense
     /// grid's flags (after `aabb_mark`, before the compaction); the tiles' depth ranges (after
     /// Forward+'s depth pre-pass, before the culling). The G-buffer leaves its depth a copy
     /// source.
