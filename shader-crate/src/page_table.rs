@@ -11,7 +11,7 @@
 //!    does it all ([`allocate_scan`], [`allocate_run`]): the key space has few pages (4096 at
 //!    1080p, 16 384 at 4K), and on the H200 each dependent dispatch of a device-wide scan costs
 //!    about 6 µs, more than scanning them in one workgroup. Steps 3 and 5 take 4 dispatches in
-//!    all, where device-wide scans of the marks and of the slots took 13.
+//!    all, where device-wide scans of the marks and of the slots took 14.
 //! 4. **store** — per pixel: `slots[page_base[key >> 9]·512 + (key & 511)] = 1`.
 //! 5. **compact** — exclusive scan of `slots` → `slot_rank`; per set slot `s`:
 //!    `unique[slot_rank[s]] = key_of_slot(s)`. In three dispatches over the allocated pages: a

@@ -7,11 +7,11 @@
 //! 3. **page table** — (pages marked with the keys) allocate in one workgroup (a scan of the
 //!    marks) → store slots → per allocated page count its set slots → scan those counts in one
 //!    workgroup → per page rank and compact its slots into the sorted unique-cluster list
-//!    (`page_table`). Five dispatches, two of them one workgroup; device-wide scans of the marks
-//!    and of the slots took twelve, on the H200 about 6 µs each whatever their size. Allocation
-//!    is sized from the resolution; the per-page passes cover the pages the frame allocated
-//!    (indirect dispatches that the allocation writes). Marks and slots are cleared by their
-//!    last readers, never at capacity.
+//!    (`page_table`). Five dispatches, two of them one workgroup, where device-wide scans of the
+//!    marks and of the slots made the pass fifteen, on the H200 about 6 µs each whatever their
+//!    size. Allocation is sized from the resolution; the per-page passes cover the pages the
+//!    frame allocated (indirect dispatches that the allocation writes). Marks and slots are
+//!    cleared by their last readers, never at capacity.
 //! 4. **assignment** — per unique cluster, its lights counted and its list's place reserved with
 //!    one atomic add (`shaders::clustered::reserve_list`), then filled; offsets + counts give
 //!    each cluster's list. Both run for the frame's unique clusters (indirect dispatches from the
