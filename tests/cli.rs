@@ -213,6 +213,8 @@ fn render_bad_input_is_a_one_line_error_with_status_2() {
         (vec!["--view", "octa-error"], vec!["'octa-error'", "heatmap"]),
         (vec!["--oit", "k3"], vec!["'k3'", "exact", "weighted"]),
         (vec!["--stats", "/nonexistent-dir/s.json"], vec!["--stats", "does not exist"]),
+        (vec!["--spot-fraction", "-0.1"], vec!["--spot-fraction", "-0.1 is not in [0, 1]"]),
+        (vec!["--spot-fraction", "1.5"], vec!["--spot-fraction", "1.5 is not in [0, 1]"]),
     ];
     for (extra, needles) in cases {
         let mut args = vec!["render", "--out", o];

@@ -45,7 +45,7 @@ pub struct RenderArgs {
     pub seed: u64,
     /// Share of the `--lights` that are spot lights (random cones pointing mostly down,
     /// `lights::spot_cones`), in [0, 1]; scene descriptions use `[lights] spot_fraction`.
-    #[arg(long, default_value_t = 0.0, value_parser = parse_fraction)]
+    #[arg(long, default_value_t = 0.0, value_parser = parse_fraction, allow_negative_numbers = true)]
     pub spot_fraction: f32,
     /// What the frame shows.
     #[arg(long, value_parser = frame_view_parser(), default_value = "shaded")]
