@@ -41,8 +41,8 @@ fn synchronization_hazard_is_reported() {
 }
 
 /// The recorder orders dependent dispatches, as the layer sees it: a workgroup scan writes
-/// `output` and `totals`, then `scan_add_offsets` reads `totals` and updates `output` (two steps
-/// of the device-wide scan, `render::scan`). Recorded without a barrier between them, the layer
+/// `output` and `totals`, then `scan_add_offsets` reads `totals` and updates `output` (the two
+/// steps of a scan over several workgroups). Recorded without a barrier between them, the layer
 /// reports the read-after-write; recorded through the [`Recorder`](host::vk::Recorder), which
 /// ends every dispatch with [`dispatch_barrier`](host::vk::pipeline::dispatch_barrier), it
 /// reports nothing. This layer version does not compare two dispatches
@@ -55,7 +55,7 @@ fn recorder_orders_dependent_dispatches() {
     let output = Buffer::storage(&gpu.ctx, "output", 1024).unwrap();
     let totals = Buffer::storage(&gpu.ctx, "totals", 16).unwrap();
     let scan_params = ScanParams { count: 256, _pad: [0; 3] };
-    let add_params = ScanFixParams { count: 256, slot: 0, _pad: [0; 2] };
+    let add_params = ScanFixParams { count: 256, _pad: [0; 3] };
     // Without a barrier: bind, push the buffers and constants, dispatch; twice.
     gpu.ctx
         .submit_and_wait(|cmd| {

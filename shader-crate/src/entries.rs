@@ -102,7 +102,8 @@ pub fn workgroup_scan(
     }
 }
 
-/// Device-wide scan, step 3: add each workgroup's offset to its elements.
+/// A scan over several workgroups, step 2: add each workgroup's offset (the scanned totals of
+/// [`workgroup_scan`]) to its elements.
 #[spirv(compute(threads(256)))]
 pub fn scan_add_offsets(
     #[spirv(workgroup_id)] wg: UVec3,
@@ -116,51 +117,6 @@ pub fn scan_add_offsets(
     if i < p.count {
         data[i as usize] = data[i as usize].wrapping_add(offsets[(i / crate::scan::SCAN_WORKGROUP) as usize]);
     }
-}
-
-/// Device-wide scan: copy the grand total (the top level's single total) into a counter.
-#[spirv(compute(threads(1)))]
-pub fn scan_store_total(
-    #[spirv(push_constant)] p: &ScanFixParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] totals: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &mut [u32],
-) {
-    counters[p.slot as usize] = totals[0];
-}
-
-/// Indirect dispatch arguments from a counter (`indirect::dispatch_args`), one triple per level.
-#[spirv(compute(threads(1)))]
-pub fn indirect_args(
-    #[spirv(push_constant)] p: &IndirectParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] args: &mut [u32],
-) {
-    let items = crate::indirect::saturating_mul(counters[p.counter as usize], p.scale);
-    let mut per_group = p.items_per_group;
-    let mut l = 0;
-    while l < p.levels {
-        let a = crate::indirect::dispatch_args(items, per_group);
-        let o = (p.offset + 3 * l) as usize;
-        args[o] = a[0];
-        args[o + 1] = a[1];
-        args[o + 2] = a[2];
-        per_group = crate::indirect::saturating_mul(per_group, p.growth);
-        l += 1;
-    }
-}
-
-/// The grand total of a counted scan: the last scanned element's prefix plus itself (the scan
-/// ran over whole workgroups, so its top-level total may include elements past the count).
-#[spirv(compute(threads(1)))]
-pub fn scan_counted_total(
-    #[spirv(push_constant)] p: &CountedTotalParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] input: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] output: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] counters: &mut [u32],
-) {
-    let counted = crate::indirect::saturating_mul(counters[p.count as usize], p.scale);
-    let n = if counted < p.capacity { counted } else { p.capacity } as usize;
-    counters[p.total as usize] = if n == 0 { 0 } else { output[n - 1].wrapping_add(input[n - 1]) };
 }
 
 /// Debug frame of the analytic scene ([`debug_view`]); 8×8 pixel tiles.

@@ -1,8 +1,8 @@
 //! Workgroup counts of a dispatch, on the host and on the GPU from a counter.
 //!
 //! A pass over work whose size only the GPU knows (the unique clusters of a frame) is dispatched
-//! indirectly: a one-invocation kernel turns the counter into `VkDispatchIndirectCommand`
-//! arguments ([`dispatch_args`]), so the pass launches workgroups for the real work instead of the
+//! indirectly: the kernel that counts it also writes `VkDispatchIndirectCommand` arguments
+//! ([`dispatch_args`]), so the pass launches workgroups for the real work instead of the
 //! buffer's capacity. Both sides fold large counts into a 2D grid the same way ([`fold`]); kernels
 //! linearise `wg.y · num_wg.x + wg.x` and return past their item count.
 
@@ -15,13 +15,6 @@ pub fn fold(groups: u32) -> [u32; 3] {
     let gx = if groups < 1 { 1 } else if groups > MAX_GROUPS_PER_AXIS { MAX_GROUPS_PER_AXIS } else { groups };
     let gy = groups.div_ceil(gx);
     [gx, if gy < 1 { 1 } else { gy }, 1]
-}
-
-/// `a · b`, or `u32::MAX` where that overflows (`u32::saturating_mul`, which rust-gpu cannot
-/// compile; 32-bit arithmetic only).
-#[inline]
-pub fn saturating_mul(a: u32, b: u32) -> u32 {
-    if b != 0 && a > u32::MAX / b { u32::MAX } else { a * b }
 }
 
 /// Indirect dispatch arguments for `items` items of `items_per_group` per workgroup: no workgroup
@@ -50,7 +43,6 @@ mod tests {
             }
         }
         assert_eq!(dispatch_args(0, 4), [0, 1, 1]);
-        assert_eq!([saturating_mul(3, 5), saturating_mul(1 << 16, 1 << 16), saturating_mul(u32::MAX, 1)], [15, u32::MAX, u32::MAX]);
         assert_eq!(fold(0), [1, 1, 1]);
     }
 }

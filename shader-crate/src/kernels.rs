@@ -80,11 +80,6 @@ pub const OIT_RESOLVE_WEIGHTED: Kernel<OitParams> = linear("transparency::oit_re
 
 // Device-wide scan fix-ups (`entries.rs`).
 pub const SCAN_ADD_OFFSETS: Kernel<ScanFixParams> = linear("entries::scan_add_offsets", 2);
-pub const SCAN_STORE_TOTAL: Kernel<ScanFixParams> = Kernel::new("entries::scan_store_total", 2, [1, 1, 1], false);
-/// Indirect dispatch arguments from a GPU counter (`indirect.rs`).
-pub const INDIRECT_ARGS: Kernel<IndirectParams> = Kernel::new("entries::indirect_args", 2, [1, 1, 1], false);
-/// The grand total of a scan over a GPU-counted prefix (`render::scan`, `entries.rs`).
-pub const SCAN_COUNTED_TOTAL: Kernel<CountedTotalParams> = Kernel::new("entries::scan_counted_total", 3, [1, 1, 1], false);
 
 // NURBS tessellation pass (`tessellation.rs`): one invocation per grid vertex, one per quad.
 /// Headers, knots, control points, positions, normals, uvs.
@@ -174,9 +169,6 @@ pub const ALL: &[Kernel<()>] = &[
     OIT_RESOLVE.erased(),
     OIT_RESOLVE_WEIGHTED.erased(),
     SCAN_ADD_OFFSETS.erased(),
-    SCAN_STORE_TOTAL.erased(),
-    INDIRECT_ARGS.erased(),
-    SCAN_COUNTED_TOTAL.erased(),
     NURBS_VERTICES.erased(),
     NURBS_INDICES.erased(),
     NURBS_LEVELS.erased(),

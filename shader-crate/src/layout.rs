@@ -310,15 +310,13 @@ pub const COUNTER_PAGES: u32 = 2;
 pub const COUNTER_STAGE_STRIDE: u32 = 3;
 pub const COUNTERS: u32 = 4;
 
-/// `add_offsets` / `store_total` kernels of the device-wide scan.
+/// `scan_add_offsets`: the elements `0..count` its workgroups update.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
 pub struct ScanFixParams {
     pub count: u32,
-    /// `store_total`: destination slot in the counters buffer.
-    pub slot: u32,
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
 
@@ -342,47 +340,6 @@ pub struct PageTableParams {
     pub _pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<PageTableParams>() == 32);
-
-/// `indirect_args`: `levels` dispatch argument triples for `counters[counter] · scale` items,
-/// `items_per_group · growth^l` per workgroup at level `l` (the levels of a device-wide scan),
-/// written from word `offset` of the arguments buffer (`shaders::indirect`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
-pub struct IndirectParams {
-    pub counter: u32,
-    pub scale: u32,
-    pub items_per_group: u32,
-    pub growth: u32,
-    /// Word offset of the first `VkDispatchIndirectCommand` in the arguments buffer.
-    pub offset: u32,
-    pub levels: u32,
-    pub _pad: [u32; 2],
-}
-const _: () = assert!(core::mem::size_of::<IndirectParams>() == 32);
-
-impl IndirectParams {
-    /// One argument triple at word `offset`: `counters[counter] · scale` items,
-    /// `items_per_group` per workgroup.
-    pub const fn one(counter: u32, scale: u32, items_per_group: u32, offset: u32) -> Self {
-        Self { counter, scale, items_per_group, growth: 1, offset, levels: 1, _pad: [0; 2] }
-    }
-}
-
-/// `scan_counted_total`: `counters[total] = output[n − 1] + input[n − 1]` for the
-/// `n = min(counters[count] · scale, capacity)` elements a counted scan scanned (0 for none).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
-pub struct CountedTotalParams {
-    pub count: u32,
-    pub scale: u32,
-    pub total: u32,
-    /// Elements the scanned buffers hold: a count past it (a frame about to grow its buffers)
-    /// is cut there.
-    pub capacity: u32,
-}
-const _: () = assert!(core::mem::size_of::<CountedTotalParams>() == 16);
 
 /// Radix sort kernels (`radix_histogram`, `radix_upsweep`, `radix_spine`, `radix_downsweep`,
 /// `radix_sort_tile`).

@@ -42,7 +42,6 @@ pub mod light_types;
 pub mod nurbs;
 pub mod reference;
 pub mod renderer;
-pub mod scan;
 pub mod sort;
 pub mod stats;
 pub mod technique;

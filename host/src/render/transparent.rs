@@ -311,9 +311,8 @@ impl Transparency {
 
     /// Step 1: the page table's `TRANSPARENT_MARK_PAGES` (after the key kernel, before the pages
     /// are allocated) and `TRANSPARENT_STORE_SLOTS` (after `store_slots`, before the slots are
-    /// counted); the dense
-    /// grid's flags (after `aabb_mark`, before the compaction); the tiles' depth ranges (after
-    /// Forward+'s depth pre-pass, before the culling). The G-buffer leaves its depth a copy
+    /// counted); the dense grid's flags (after `aabb_mark`, before the compaction); the tiles'
+    /// depth ranges (after Forward+'s depth pre-pass, before the culling). The G-buffer leaves its depth a copy
     /// source.
     pub fn record_clusters(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, frame: &FrameParams, depth: OpaqueDepth<'_>, m: &Marks<'_>) -> VkResult<()> {
         let (page_base, slots) = m.page_table.unwrap_or((f.bounds, &self.spare));

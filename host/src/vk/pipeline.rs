@@ -229,7 +229,7 @@ impl Recorder<'_> {
     }
 
     /// Dispatches `pipe` with the workgroup counts a kernel wrote at word `offset` of `args`
-    /// (`shaders::indirect::dispatch_args`, through [`Recorder::indirect_args`]), then a barrier.
+    /// (`shaders::indirect::dispatch_args`), then a barrier.
     pub fn dispatch_indirect<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, args: &Buffer, offset: u32) -> VkResult<()> {
         if 4 * (offset as u64 + 3) > args.size {
             return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("indirect arguments at word {offset} past the end of {}", args.name) });
@@ -240,15 +240,6 @@ impl Recorder<'_> {
         dispatch_barrier(self.ctx, self.cmd);
         self.end_part(part);
         Ok(())
-    }
-
-    /// Writes indirect dispatch arguments computed from a GPU counter into `args` (what and
-    /// where: [`shaders::layout::IndirectParams`]).
-    pub fn indirect_args(&mut self, pipe: &ComputePipeline<shaders::layout::IndirectParams>, counters: &Buffer, args: &Buffer, p: &shaders::layout::IndirectParams) -> VkResult<()> {
-        if 4 * (p.offset as u64 + 3 * p.levels as u64) > args.size {
-            return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("{} argument triples at word {} past the end of {}", p.levels, p.offset, args.name) });
-        }
-        self.dispatch(pipe, &[counters, args], p, [1, 1, 1])
     }
 
     /// Items of a subgroup-per-item kernel each workgroup covers ([`Recorder::dispatch_subgroups`]).

@@ -81,11 +81,6 @@ impl Profiler {
         self
     }
 
-    /// Whether commands inside a pass are timed as parts.
-    pub fn times_parts(&self) -> bool {
-        self.parts && self.enabled()
-    }
-
     pub fn enabled(&self) -> bool {
         self.pool != vk::QueryPool::null()
     }
