@@ -67,8 +67,9 @@ pub fn freeze_spec_constant(words: &[u32], spec_id: u32, value: u32) -> Vec<u32>
         }
         out
     };
-    let spec_target = instructions(words).into_iter().find_map(|r| {
-        let i = &words[r];
+    let instructions = instructions(words);
+    let spec_target = instructions.iter().find_map(|r| {
+        let i = &words[r.clone()];
         if i.len() == 4 && i[0] & 0xffff == OP_DECORATE && i[2] == DECORATION_SPEC_ID && i[3] == spec_id {
             Some(i[1])
         } else {
@@ -77,7 +78,7 @@ pub fn freeze_spec_constant(words: &[u32], spec_id: u32, value: u32) -> Vec<u32>
     });
     let Some(target) = spec_target else { return words.to_vec() };
     let mut out = words[..HEADER.min(words.len())].to_vec();
-    for r in instructions(words) {
+    for r in instructions {
         let i = &words[r];
         let op = i[0] & 0xffff;
         if op == OP_DECORATE && i.len() == 4 && i[1] == target && i[2] == DECORATION_SPEC_ID {
