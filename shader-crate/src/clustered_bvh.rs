@@ -131,7 +131,7 @@ pub fn stage_stride(words: u32, clusters: u32) -> u32 {
     if s < MAX_STAGE_STRIDE { s } else { MAX_STAGE_STRIDE }
 }
 
-/// Whether cluster `cl` with `count` lights has its whole list staged (`stride` words each).
+/// Whether a cluster with `count` lights has its whole list staged (`stride` words each).
 #[inline]
 pub fn staged(count: u32, stride: u32) -> bool {
     count <= stride
