@@ -49,8 +49,7 @@ pub struct Kernels {
     pub bvh_spheres: ComputePipeline<BvhParams>,
     pub bvh_leaves: ComputePipeline<BvhParams>,
     pub bvh_level: ComputePipeline<BvhParams>,
-    pub cluster_light_counts_bvh: LightCompute<BvhAssignParams>,
-    pub cluster_light_fill_bvh: LightCompute<BvhAssignParams>,
+    pub assign_lights_bvh: LightCompute<BvhAssignParams>,
     /// Tiled culling + shading `[diffuse only, with specular]`.
     pub shade_tiled: [LightCompute<TiledParams>; 2],
     pub aabb_bounds: ComputePipeline<FrameParams>,
@@ -102,8 +101,7 @@ impl Kernels {
             bvh_spheres: ComputePipeline::new(ctx, module, kernels::BVH_SPHERES)?,
             bvh_leaves: ComputePipeline::new(ctx, module, kernels::BVH_LEAVES)?,
             bvh_level: ComputePipeline::new(ctx, module, kernels::BVH_LEVEL)?,
-            cluster_light_counts_bvh: LightTyped::compute(light, kernels::CLUSTER_LIGHT_COUNTS_BVH),
-            cluster_light_fill_bvh: LightTyped::compute(light, kernels::CLUSTER_LIGHT_FILL_BVH),
+            assign_lights_bvh: LightTyped::compute(light, kernels::ASSIGN_LIGHTS_BVH),
             shade_tiled: [
                 LightTyped::compute(light, kernels::SHADE_TILED_DIFFUSE),
                 LightTyped::compute(light, kernels::SHADE_TILED_SPECULAR),
@@ -229,7 +227,7 @@ impl Gpu {
         let frame = [&k.shade_clustered[..], &k.shade_deferred, &k.shade_aabb].into_iter().flatten().map(LightTyped::created);
         let tiled = [&k.shade_tiled, &k.forward_plus_cull, &k.forward_plus_cull_widened].into_iter().flatten().map(LightTyped::created);
         let single = [k.cluster_light_counts.created(), k.cluster_light_fill.created(), k.aabb_assign.created()];
-        let bvh = [k.cluster_light_counts_bvh.created(), k.cluster_light_fill_bvh.created()];
+        let bvh = [k.assign_lights_bvh.created()];
         let raster = self.raster.forward_shade.iter().flatten().map(LightTyped::created);
         frame.chain(tiled).chain(single).chain(bvh).chain(raster).flatten().collect()
     }

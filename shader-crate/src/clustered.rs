@@ -289,8 +289,8 @@ pub fn cluster_light_counts(
 
 /// 6–7 (both assignments). The start of a cluster's list of `n` lights in the global list: `n`
 /// entries reserved with one atomic add on [`COUNTER_LIGHT_REFS`], which ends the pass as the
-/// frame's total of light references (the fill pass writes nothing when it exceeds the list's
-/// capacity, and the host grows the list). Lists land in the order the clusters reserve them;
+/// frame's total of light references (the host grows the list when it exceeds the capacity: the
+/// naive fill pass then writes nothing, the BVH assignment no list that would end past it). Lists land in the order the clusters reserve them;
 /// each cluster's own list is in light order whatever that order, and shading reads it through
 /// its offset and count. One atomic per cluster instead of a device-wide scan of the counts
 /// (seven dependent dispatches on the H200: 6 µs each).
@@ -334,7 +334,6 @@ specular_entries! {
     /// materials, the specular term compiled out, and `_specular`).
     fn shade_clustered_impl<const SPECULAR: bool>(
         #[spirv(workgroup_id)] wg: UVec3,
-        #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
         #[spirv(push_constant)] p: &FrameParams,
         #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
@@ -353,8 +352,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
-        let i = linear_index(wg, nwg, local);
-        if i >= p.count {
+        let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
+        if i == shading::NO_PIXEL {
             return;
         }
         let key = keys[i as usize];

@@ -278,7 +278,6 @@ specular_entries! {
     /// 4. Shading: per pixel, its cluster's lights (`_diffuse` / `_specular` variants).
     fn shade_aabb_impl<const SPECULAR: bool>(
         #[spirv(workgroup_id)] wg: UVec3,
-        #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
         #[spirv(push_constant)] p: &FrameParams,
         #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
@@ -296,8 +295,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
-        let i = linear_index(wg, nwg, local);
-        if i >= p.count {
+        let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
+        if i == shading::NO_PIXEL {
             return;
         }
         let cluster = pixel_clusters[i as usize];

@@ -108,9 +108,9 @@ pub fn cluster_lights_bvh<C: Coop>(
     light_bvh::walk_subgroup(c, nodes, spheres, order, f.num_lights, p.branching, &cluster_aabb_of_key(&f.grid, bounds, key), f.effects, lights, emit)
 }
 
-/// The staged lists: the counting walk also stores each cluster's lights, and the fill pass
-/// copies every list that fits instead of walking the tree again (longer lists are walked
-/// twice). The buffer's words are shared out among the frame's unique clusters
+/// The staged lists: the walk stores each cluster's lights as it counts them, and copies every
+/// list that fits to its place once reserved instead of walking the tree again (longer lists
+/// are walked twice). The buffer's words are shared out among the frame's unique clusters
 /// ([`stage_stride`]), so a frame with few clusters stages long lists: on the H200 (Sponza
 /// 1080p, 6 732 clusters, 16 MiB) every list up to 1 024 lights, where 64 per cluster left the
 /// fill pass re-walking most clusters at 1M lights (0.165 ms of its 0.404 ms assignment).
@@ -145,7 +145,7 @@ pub fn stage(stage: &mut [u32], cl: u32, k: u32, light: u32, stride: u32) {
     }
 }
 
-/// Step 3, pass 2 for a staged cluster: its `count` lights copied to `list[base..]`, lane by lane.
+/// Step 3 for a staged cluster: its `count` lights copied to `list[base..]`, lane by lane.
 #[inline]
 pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, stride: u32, base: u32, mut store: impl FnMut(u32, u32)) {
     let mut i = c.lane();
@@ -155,11 +155,15 @@ pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, stride: u
     }
 }
 
-/// Step 3, pass 1: lights per unique cluster (one subgroup each), the first
-/// `counters[COUNTER_STAGE_STRIDE]` of each stored in `staged_lists`, and the list's place.
+/// Step 3: the lights of each unique cluster, one subgroup per cluster, in one pass. The walk
+/// counts the lights and stages the first `counters[COUNTER_STAGE_STRIDE]` of them; lane 0
+/// reserves the list ([`crate::clustered::reserve_list`]); a staged list is then copied to its
+/// place (after a subgroup barrier on storage memory: a lane copies entries other lanes staged),
+/// a longer one walked again straight into it. A list that would end past the list's capacity
+/// is not written: the counter ends as the frame's total and the host grows the list.
 #[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
 #[allow(clippy::too_many_arguments)]
-pub fn cluster_light_counts_bvh(
+pub fn assign_lights_bvh(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local_index: u32,
@@ -179,6 +183,7 @@ pub fn cluster_light_counts_bvh(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] staged_lists: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] offsets: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] list: &mut [u32],
 ) {
     let p = &crate::light_types::specialise(p, light_types);
     let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
@@ -187,56 +192,47 @@ pub fn cluster_light_counts_bvh(
         return;
     }
     let stride = counters[COUNTER_STAGE_STRIDE as usize];
-    let n = cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| stage(staged_lists, cl, k, l, stride));
-    if lane == 0 {
-        counts[cl as usize] = n;
-        offsets[cl as usize] = crate::clustered::reserve_list(counters, n);
+    let key = unique[cl as usize];
+    // One walk in the code, run once (staging) or twice (the second straight into the list):
+    // one inlined walk keeps the kernel as small as the two it replaces.
+    let mut base = 0;
+    let mut second = false;
+    loop {
+        // Captured by value: a closure holding a reference to a loop variable is a pointer
+        // that `spirv-val` rejects.
+        let (at, into_list, to_stage, to_list) = (base, second, &mut *staged_lists, &mut *list);
+        let count = cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, key, move |k, l| {
+            if into_list {
+                to_list[(at + k) as usize] = l;
+            } else {
+                stage(to_stage, cl, k, l, stride);
+            }
+        });
+        if second {
+            return;
+        }
+        let reserved = if lane == 0 { crate::clustered::reserve_list(counters, count) } else { 0 };
+        base = c.shuffle(reserved, 0);
+        if lane == 0 {
+            counts[cl as usize] = count;
+            offsets[cl as usize] = base;
+        }
+        if !fits(base, count, p.frame.light_capacity) {
+            return;
+        }
+        if staged(count, stride) {
+            c.subgroup_storage_barrier();
+            copy_staged(&c, staged_lists, cl, count, stride, base, |i, l| list[i as usize] = l);
+            return;
+        }
+        second = true;
     }
 }
 
-/// Step 3, pass 2: each cluster's light indices at its offset (one subgroup each): copied from
-/// its stage where the whole list is staged, walked again otherwise.
-#[spirv(compute(threads(64)))] // light_bvh::WALK_WORKGROUP
-#[allow(clippy::too_many_arguments)]
-pub fn cluster_light_fill_bvh(
-    #[spirv(workgroup_id)] wg: UVec3,
-    #[spirv(num_workgroups)] nwg: UVec3,
-    #[spirv(local_invocation_index)] local_index: u32,
-    #[spirv(subgroup_size)] subgroup_size: u32,
-    #[spirv(subgroup_local_invocation_id)] lane: u32,
-    #[spirv(subgroup_id)] subgroup_id: u32,
-    #[spirv(num_subgroups)] num_subgroups: u32,
-    #[spirv(push_constant)] p: &BvhAssignParams,
-    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] unique: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] counters: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] bounds: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] spheres: &[LightSphere],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] offsets: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] list: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] order: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] nodes: &[ClusterAabb],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] staged_lists: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] counts: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] lights: &[PointLight],
-) {
-    let p = &crate::light_types::specialise(p, light_types);
-    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-    let cl = subgroup_item(&c, wg, nwg);
-    if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
-        return;
-    }
-    if counters[COUNTER_LIGHT_REFS as usize] > p.frame.light_capacity {
-        return;
-    }
-    let base = offsets[cl as usize];
-    let count = counts[cl as usize];
-    let stride = counters[COUNTER_STAGE_STRIDE as usize];
-    if staged(count, stride) {
-        copy_staged(&c, staged_lists, cl, count, stride, base, |i, l| list[i as usize] = l);
-    } else {
-        cluster_lights_bvh(&c, p, bounds, spheres, order, nodes, lights, unique[cl as usize], |k, l| list[(base + k) as usize] = l);
-    }
+/// Whether a list of `count` entries at `base` ends within `capacity` (no overflow of `u32`).
+#[inline]
+pub fn fits(base: u32, count: u32, capacity: u32) -> bool {
+    count <= capacity && base <= capacity - count
 }
 
 #[cfg(test)]
@@ -255,6 +251,9 @@ mod tests {
         assert_eq!(stage_stride(words, words + 1), 0);
         assert_eq!(stage_stride(words, 0), 0);
         assert_eq!(stage_stride(0, 10), 0);
+        // A list is written only where it ends within the capacity.
+        assert!(fits(0, 10, 10) && fits(6, 4, 10) && fits(10, 0, 10));
+        assert!(!fits(7, 4, 10) && !fits(0, 11, 10) && !fits(u32::MAX, 2, 10) && !fits(3, u32::MAX, 10));
         // Every cluster's stage lies inside the buffer.
         for clusters in [1, 7, 6732, 65_536, 1 << 20] {
             let s = stage_stride(words, clusters);

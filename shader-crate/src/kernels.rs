@@ -107,10 +107,8 @@ pub const BVH_SPHERES: Kernel<BvhParams> = linear("clustered_bvh::bvh_spheres", 
 pub const BVH_LEAVES: Kernel<BvhParams> = Kernel::new("clustered_bvh::bvh_leaves", 2, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 pub const BVH_LEVEL: Kernel<BvhParams> = linear("clustered_bvh::bvh_level", 1);
 /// One subgroup per unique cluster (subgroup-parallel walk): cooperative.
-pub const CLUSTER_LIGHT_COUNTS_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_counts_bvh", 10, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
-pub const CLUSTER_LIGHT_FILL_BVH: Kernel<BvhAssignParams> =
-    Kernel::new("clustered_bvh::cluster_light_fill_bvh", 11, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
+pub const ASSIGN_LIGHTS_BVH: Kernel<BvhAssignParams> =
+    Kernel::new("clustered_bvh::assign_lights_bvh", 11, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
 pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
@@ -182,8 +180,7 @@ pub const ALL: &[Kernel<()>] = &[
     BVH_SPHERES.erased(),
     BVH_LEAVES.erased(),
     BVH_LEVEL.erased(),
-    CLUSTER_LIGHT_COUNTS_BVH.erased(),
-    CLUSTER_LIGHT_FILL_BVH.erased(),
+    ASSIGN_LIGHTS_BVH.erased(),
     SHADE_TILED_DIFFUSE.erased(),
     SHADE_TILED_SPECULAR.erased(),
     AABB_BOUNDS.erased(),

@@ -13,8 +13,10 @@
 //!   It is the CPU reference of the walk.
 //! * [`walk_subgroup`] — one *subgroup* per cluster (the GPU's walk): the lanes test the
 //!   children of a node in parallel, a ballot gives the mask of children to visit, the walk pops
-//!   them lowest first; at a leaf node the lanes test its lights in parallel and the voting lanes
-//!   write their light at `found + ballot_rank`. Every lane ends with the same count.
+//!   them lowest first; at the leaves the lanes test the lights of two leaves per step (each lane
+//!   loads its four chunks' spheres before testing any: one round trip of loads instead of one
+//!   per chunk and leaf) and the voting lanes write their light at `found + ballot_rank`. Every
+//!   lane ends with the same count.
 //!
 //! A light meets the cluster exactly when its sphere does (the same `sphere_intersects_aabb` as
 //! the naive search), and every ancestor box contains the light's sphere box, so both walks give
@@ -343,6 +345,59 @@ fn pop_lowest(mask: &mut [u32; 2]) -> u32 {
     }
 }
 
+/// No second leaf in a [`LeafPair`].
+const NO_LEAF: u32 = u32::MAX;
+
+/// The lights of one or two level-0 nodes as one range of slots: slot `v < B` is light `v` of
+/// leaf `first`, slot `B + v` light `v` of leaf `second` (where there is one).
+struct LeafPair {
+    first: u32,
+    second: u32,
+    b: u32,
+    n: u32,
+}
+
+/// A lane's light of one chunk of a [`LeafPair`], loaded ahead of its test.
+struct LeafSlot {
+    sphere: LightSphere,
+    light: u32,
+    valid: bool,
+}
+
+impl LeafPair {
+    /// Slot `v`'s sphere and light index. Branch-free: every lane reads a valid slot (the last
+    /// light of the leaf where `v` is past it) and `valid` says whether the slot holds a light.
+    #[inline]
+    fn load(&self, spheres: &[LightSphere], order: &[u32], v: u32) -> LeafSlot {
+        let (leaf, k) = if v >= self.b && self.second != NO_LEAF { (self.second, v - self.b) } else { (self.first, v) };
+        let s = leaf * self.b + k;
+        let last = if leaf * self.b + self.b < self.n { leaf * self.b + self.b } else { self.n };
+        let sv = if s < last { s } else { last - 1 };
+        LeafSlot { sphere: spheres[sv as usize], light: order[sv as usize], valid: s < last }
+    }
+}
+
+impl LeafSlot {
+    /// The subgroup's vote on one chunk (`in_span`: the chunk is part of the range, uniform):
+    /// lanes whose light meets the cluster (sphere, and cone for spots) emit it at `found` plus
+    /// their rank; returns the new count.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn vote<C: Coop>(&self, c: &C, in_span: bool, found: u32, cluster: &ClusterAabb, effects: u32, lights: &[PointLight], n: u32, c0: Vec3, r0: f32, emit: &mut impl FnMut(u32, u32)) -> u32 {
+        if !in_span {
+            return found;
+        }
+        // The tests are combined with `&` (a short-circuit chain here miscompiled on lavapipe).
+        let sphere = lighting::sphere_intersects_aabb(Vec3::from_array(self.sphere.position), self.sphere.radius, cluster);
+        let hit = self.valid & sphere & crate::light_types::spot_may_meet(effects, lights, n, self.light, c0, r0);
+        let vote = c.ballot(hit);
+        if hit {
+            emit(found + ballot_rank(vote, c.lane()), self.light);
+        }
+        found + ballot_count(vote)
+    }
+}
+
 /// The subgroup-parallel walk: every lane of the subgroup calls it with the same `cluster` (in
 /// subgroup-uniform control flow). Lanes whose light meets the cluster call `emit(k, light)` with
 /// its dense slot `k`; every lane returns the cluster's count. Spot lights (`effects` with
@@ -390,26 +445,23 @@ pub fn walk_subgroup<C: Coop>(
         let node = first[l] + pop_lowest(&mut pending[l]);
         let child0 = node * b;
         if level == 0 {
-            let last = if child0 + b < n { child0 + b } else { n };
-            let mut ch = 0;
-            while ch < b {
-                unroll8!(u => {
-                    let chunk = ch + u * w;
-                    if chunk < b {
-                        let s = child0 + chunk + lane;
-                        // Branch-free: every lane reads a valid slot, the tests are combined
-                        // with `&` (a short-circuit chain here miscompiled on lavapipe).
-                        let sv = if s < last { s } else { last - 1 };
-                        let cone = crate::light_types::spot_may_meet(effects, lights, n, order[sv as usize], c0, r0);
-                        let hit = (s < last) & light_hits(spheres, sv, cluster) & cone;
-                        let vote = c.ballot(hit);
-                        if hit {
-                            emit(found + ballot_rank(vote, lane), order[s as usize]);
-                        }
-                        found += ballot_count(vote);
-                    }
-                });
-                ch += 8 * w;
+            // Two leaves per step where the node has two left: one round trip of loads for both.
+            let second = if pending[0][0] != 0 || pending[0][1] != 0 { first[0] + pop_lowest(&mut pending[0]) } else { NO_LEAF };
+            let leaves = LeafPair { first: node, second, b, n };
+            let span = if second == NO_LEAF { b } else { 2 * b };
+            let mut v0 = 0;
+            while v0 < span {
+                // Every lane loads its slot of four chunks before any is tested, so the four
+                // loads are in flight together (a walk is a chain of dependent steps).
+                let k0 = leaves.load(spheres, order, v0 + lane);
+                let k1 = leaves.load(spheres, order, v0 + w + lane);
+                let k2 = leaves.load(spheres, order, v0 + 2 * w + lane);
+                let k3 = leaves.load(spheres, order, v0 + 3 * w + lane);
+                found = k0.vote(c, v0 < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
+                found = k1.vote(c, v0 + w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
+                found = k2.vote(c, v0 + 2 * w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
+                found = k3.vote(c, v0 + 3 * w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
+                v0 += 4 * w;
             }
         } else {
             let below = (level - 1) as usize;

@@ -268,13 +268,25 @@ pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, ligh
 /// lobe is not compiled at all (whatever `effects` says); with `true` it is [`shade`].
 #[inline]
 pub fn shade_variant<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
+    shade_unit_normal::<SPECULAR>(p, unit_normal(n), albedo, specular, roughness, light, effects)
+}
+
+/// The normal [`shade_variant`] shades with: `n / |n|`, or 0 for a zero or NaN normal.
+#[inline]
+pub fn unit_normal(n: Vec3) -> Vec3 {
+    normalize_or(n, Vec3::ZERO)
+}
+
+/// [`shade_variant`] with the normal already through [`unit_normal`]: the light loops normalise
+/// once per pixel, not once per light (same result).
+#[inline]
+pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     let c = Vec3::from_array(light.position);
     let dist2 = distance2(p, c);
     let att = falloff(dist2, light.radius, effects);
     if !(att > 0.0) {
         return Vec3::ZERO;
     }
-    let n = normalize_or(n, Vec3::ZERO);
     let l = if dist2 > MIN_LENGTH2 { (c - p) * (1.0 / dist2.sqrt()) } else { n };
     brdf_radiance::<SPECULAR>(p, n, l, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
 }

@@ -143,7 +143,7 @@ pub fn page_slot_scan<C: Coop, S: SharedU32 + ?Sized>(c: &C, shared: &mut S, slo
     crate::scan::workgroup_exclusive_scan(c, shared, set)
 }
 
-/// Pages of the key space of `grid`./// Pages of the key space of `grid`.
+/// Pages of the key space of `grid`.
 #[inline]
 pub fn page_count(grid: &ClusterGrid) -> u32 {
     let bits = grid.bits_i + grid.bits_j + grid.bits_k;

@@ -4,7 +4,8 @@
 //! ([`crate::tiled`]), clustered-AABB ([`crate::clustered_aabb`]) and the Forward+ fragment
 //! shader ([`crate::raster_forward`]); the linear non-shading kernels use [`linear_index`] too.
 //!
-//! * **Pixel** — [`linear_index`]: element of a 2D-folded linear dispatch.
+//! * **Pixel** — [`linear_index`]: element of a 2D-folded linear dispatch; [`block_pixel`]: pixel
+//!   of a dispatch of 32×8 blocks (the cluster-list shading kernels).
 //! * **Surface** — [`fetch_surface`]: depth → view position ([`pixel_position`]), the G-buffer
 //!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
 //!   albedo and material ([`gbuffer_albedo`]).
@@ -56,6 +57,31 @@ pub const NO_NODE: u32 = u32::MAX;
 #[inline]
 pub fn linear_index(wg: UVec3, num_wg: UVec3, local: u32) -> u32 {
     (wg.y * num_wg.x + wg.x) * LINEAR_WORKGROUP + local
+}
+
+/// Width in pixels of the block a cluster-list shading workgroup covers ([`block_pixel`]): one
+/// 32-pixel row per subgroup of 32.
+pub const BLOCK_WIDTH: u32 = 32;
+/// Height of that block: the workgroup's [`LINEAR_WORKGROUP`] invocations in rows of
+/// [`BLOCK_WIDTH`].
+pub const BLOCK_HEIGHT: u32 = LINEAR_WORKGROUP / BLOCK_WIDTH;
+/// What [`block_pixel`] returns for an invocation outside the frame.
+pub const NO_PIXEL: u32 = u32::MAX;
+
+/// Pixel (row-major index) of invocation `local` of workgroup `wg` in a dispatch of
+/// `BLOCK_WIDTH × BLOCK_HEIGHT` blocks, or [`NO_PIXEL`] past the frame's edge. A block's rows
+/// lie in one column of cluster tiles (32 px wide by default), so a workgroup's subgroups walk
+/// the same few light lists and read the same lights, from the same SM's cache; in a linear
+/// dispatch each of a workgroup's 256-pixel row runs crosses eight tiles.
+#[inline]
+pub fn block_pixel(wg: UVec3, local: u32, width: u32, height: u32) -> u32 {
+    let x = wg.x * BLOCK_WIDTH + local % BLOCK_WIDTH;
+    let y = wg.y * BLOCK_HEIGHT + local / BLOCK_WIDTH;
+    if x < width && y < height {
+        y * width + x
+    } else {
+        NO_PIXEL
+    }
 }
 
 /// Albedo and material index of a G-buffer albedo word (RGBA8 UNORM, material in alpha).
@@ -267,6 +293,8 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     sum: &mut Vec3,
 ) -> u32 {
     let effects = variant_effects::<SPECULAR>(frame_effects);
+    // The normal is normalised once here, not once per light (`lighting::shade_unit_normal`).
+    let s = &Surface { normal: lighting::unit_normal(s.normal), ..*s };
     if UNROLLED {
         if let Some(end) = list.end() {
             return shade_range::<SPECULAR, L>(s, effects, num_lights, lights, list, end, sum);
@@ -322,12 +350,13 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, nu
     end - first
 }
 
-/// The radiance of punctual light `l` (record `light`) at `s`: [`lighting::shade_variant`],
+/// The radiance of punctual light `l` (record `light`) at `s` (unit normal, [`shade_lights`]):
+/// [`lighting::shade_variant`],
 /// times its cone falloff ([`spot::spot_factor`]) when the frame has spot lights
 /// ([`EFFECT_SPOT`]; a point light's marker record gives exactly 1).
 #[inline]
 fn shade_one<const SPECULAR: bool>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight) -> Vec3 {
-    let radiance = lighting::shade_variant::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
+    let radiance = lighting::shade_unit_normal::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
     if effects & EFFECT_SPOT != 0 {
         radiance * spot::spot_factor(Vec3::from_array(light.position), &cone_of(lights, num_lights, l), s.pos)
     } else {

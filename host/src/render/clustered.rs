@@ -19,11 +19,13 @@
 //!    placed the lists before: seven dependent dispatches, 0.05 ms on the H200.)
 //!    `clustered-naive` tests every light against the cluster's AABB; `clustered-bvh` walks the
 //!    light BVH (`bvh.rs`: Morton keys → sort (`sort.rs`) → 32/64-ary node boxes, on the
-//!    async-compute queue, overlapping the G-buffer raster). Its counting walk also stages each
-//!    cluster's lights, so the fill copies every list that fits instead of walking again (H200,
-//!    Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms with 64 staged per cluster). The
-//!    stage's words are shared out among the frame's clusters (`clustered_bvh::stage_stride`,
-//!    stored by the page table's scan: up to 1 024 lights each).
+//!    async-compute queue, overlapping the G-buffer raster) in one pass
+//!    (`clustered_bvh::assign_lights_bvh`): its walk stages each cluster's lights as it counts
+//!    them, and once the list is reserved copies every list that fits instead of walking again
+//!    (H200, Sponza 1080p, 10k lights: assignment 0.260 → 0.158 ms with 64 staged per cluster,
+//!    when a second pass copied them). The stage's words are shared out among the frame's
+//!    clusters (`clustered_bvh::stage_stride`, stored by the page table's scan: up to 1 024
+//!    lights each).
 //! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
 //! 6. **transparency** (scenes with transparent draws, `transparent.rs`): inside steps 2 and 3 a
 //!    raster pre-pass of the transparent draws marks their fragments' pages, then slots, so
@@ -201,9 +203,9 @@ struct ClusterBuffers {
     pub offsets: Buffer,
     pub list: Buffer,
     pub counters: Buffer,
-    /// `clustered-bvh`: the lists the counting walk stages (`shaders::clustered_bvh::stage`) for
-    /// the frame's clusters (`stage_words` words shared out among them), copied by the fill pass
-    /// instead of a second walk.
+    /// `clustered-bvh`: the lists the walk stages (`shaders::clustered_bvh::stage`) for the
+    /// frame's clusters (`stage_words` words shared out among them), copied to their place once
+    /// reserved instead of a second walk.
     staged: Option<Buffer>,
     stage_words: u32,
     /// Workgroup counts written on the GPU from its counters (`VkDispatchIndirectCommand`s):
@@ -301,7 +303,7 @@ impl ClusterBuffers {
         let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
         let per_group = match walk {
             None => shaders::kernels::CLUSTER_LIGHT_COUNTS.invocations(),
-            Some(_) => rec.subgroup_items_per_group(k.cluster_light_counts_bvh.get(c.effects)?),
+            Some(_) => rec.subgroup_items_per_group(k.assign_lights_bvh.get(c.effects)?),
         };
         rec.pass("page table", |rec| {
             // One workgroup allocates the marked pages (and sizes the per-page dispatches).
@@ -324,27 +326,21 @@ impl ClusterBuffers {
         rec.pass("assignment", |rec| {
             let args = &self.dispatch_args;
             match walk {
-                None => rec.dispatch_indirect(
-                    k.cluster_light_counts.get(c.effects)?,
-                    &[&self.unique, &self.counters, bounds, lights, &self.counts, &self.offsets],
-                    &c,
-                    args,
-                    ARGS_ASSIGNMENT,
-                )?,
+                None => {
+                    rec.dispatch_indirect(
+                        k.cluster_light_counts.get(c.effects)?,
+                        &[&self.unique, &self.counters, bounds, lights, &self.counts, &self.offsets],
+                        &c,
+                        args,
+                        ARGS_ASSIGNMENT,
+                    )?;
+                    // The counting pass placed each list (`shaders::clustered::reserve_list`): no scan.
+                    rec.dispatch_indirect(k.cluster_light_fill.get(c.effects)?, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT)
+                }
+                // One pass: walk, reserve, copy the staged list (`shaders::clustered_bvh::assign_lights_bvh`).
                 Some((b, st, w)) => rec.dispatch_indirect(
-                    k.cluster_light_counts_bvh.get(c.effects)?,
-                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes, st, lights, &self.offsets],
-                    &w,
-                    args,
-                    ARGS_ASSIGNMENT,
-                )?,
-            }
-            // The counting pass placed each list (`shaders::clustered::reserve_list`): no scan.
-            match walk {
-                None => rec.dispatch_indirect(k.cluster_light_fill.get(c.effects)?, &[&self.unique, &self.counters, bounds, lights, &self.offsets, &self.list], &c, args, ARGS_ASSIGNMENT),
-                Some((b, st, w)) => rec.dispatch_indirect(
-                    k.cluster_light_fill_bvh.get(c.effects)?,
-                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.offsets, &self.list, &b.order, &b.nodes, st, &self.counts, lights],
+                    k.assign_lights_bvh.get(c.effects)?,
+                    &[&self.unique, &self.counters, bounds, &b.spheres, &self.counts, &b.order, &b.nodes, st, lights, &self.offsets, &self.list],
                     &w,
                     args,
                     ARGS_ASSIGNMENT,
@@ -352,11 +348,12 @@ impl ClusterBuffers {
             }
         })?;
         rec.pass("shading", |rec| {
-            rec.dispatch_linear(
+            rec.dispatch_blocks(
                 super::shading_pipeline(&k.shade_clustered, p)?,
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.keys, &self.page_base, &self.slot_rank, &self.counts, &self.offsets, &self.list, lights, materials, frame, bounds],
                 p,
-                n,
+                p.grid.width,
+                p.grid.height,
             )
         })?;
         let Some(t) = transparency else { return Ok(()) };

@@ -136,11 +136,12 @@ impl LightingTechnique for ClusteredAabb {
             )
         })?;
         rec.pass("shading", |rec| {
-            rec.dispatch_linear(
+            rec.dispatch_blocks(
                 super::shading_pipeline(&k.shade_aabb, &p)?,
                 &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters, f.lights, f.materials, f.frame, f.bounds],
                 &p,
-                n,
+                p.grid.width,
+                p.grid.height,
             )
         })?;
         let Some(t) = &self.transparency else { return Ok(()) };

@@ -301,6 +301,14 @@ impl Recorder<'_> {
         self.dispatch(pipe, buffers, params, fold(groups))
     }
 
+    /// Dispatches a kernel over a `width × height` frame in blocks of
+    /// `shaders::shading::BLOCK_WIDTH × BLOCK_HEIGHT` pixels (`shaders::shading::block_pixel`).
+    pub fn dispatch_blocks<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P, width: u32, height: u32) -> VkResult<()> {
+        use shaders::shading::{BLOCK_HEIGHT, BLOCK_WIDTH};
+        debug_assert_eq!(BLOCK_WIDTH * BLOCK_HEIGHT, pipe.kernel.invocations(), "{}: a block per workgroup", pipe.kernel.entry);
+        self.dispatch(pipe, buffers, params, [width.div_ceil(BLOCK_WIDTH), height.div_ceil(BLOCK_HEIGHT), 1])
+    }
+
     /// Dispatches a kernel that gives each of `items` its own subgroup (item = workgroup index ·
     /// subgroups per workgroup + subgroup id): enough workgroups for the device's *largest*
     /// subgroup width (fewest subgroups per workgroup), so every item is covered whatever width

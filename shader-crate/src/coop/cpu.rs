@@ -106,6 +106,9 @@ impl Coop for CpuCoop<'_> {
     fn subgroup_barrier(&self) {
         self.yielder.suspend(Request::SubgroupBarrier);
     }
+    fn subgroup_storage_barrier(&self) {
+        self.yielder.suspend(Request::SubgroupBarrier);
+    }
 }
 
 /// One emulated invocation's handle on workgroup memory.

@@ -60,4 +60,13 @@ impl Coop for GpuCoop {
             { Semantics::WORKGROUP_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() },
         >();
     }
+    #[inline]
+    fn subgroup_storage_barrier(&self) {
+        use spirv_std::memory::{Scope, Semantics};
+        spirv_std::arch::control_barrier::<
+            { Scope::Subgroup as u32 },
+            { Scope::Subgroup as u32 },
+            { Semantics::UNIFORM_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() },
+        >();
+    }
 }

@@ -59,6 +59,9 @@ pub trait Coop {
     /// workgroup-memory stores before it are seen by the subgroup's other lanes after it (a
     /// shuffle or ballot alone does not order memory).
     fn subgroup_barrier(&self);
+    /// The same over storage buffers: one lane's storage-buffer stores before it are seen by
+    /// the subgroup's other lanes after it.
+    fn subgroup_storage_barrier(&self);
 }
 
 /// Workgroup memory seen as `u32` words.
