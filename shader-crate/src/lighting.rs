@@ -283,12 +283,27 @@ pub fn unit_normal(n: Vec3) -> Vec3 {
 pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     let c = Vec3::from_array(light.position);
     let dist2 = distance2(p, c);
-    let att = falloff(dist2, light.radius, effects);
-    if !(att > 0.0) {
+    // The cheap rejections first, each as exact as the full evaluation: out of range (both
+    // falloffs are 0 unless `dist2 < radius²`), then behind the surface (`n·l ≤ 0`, with `n·l`
+    // as `n·(c − p) / |c − p|`: the direction is normalised only where the specular lobe
+    // needs it). Then the falloff.
+    if !(dist2 < light.radius * light.radius) {
         return Vec3::ZERO;
     }
-    let l = if dist2 > MIN_LENGTH2 { (c - p) * (1.0 / dist2.sqrt()) } else { n };
-    brdf_radiance::<SPECULAR>(p, n, l, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
+    let to_light = c - p;
+    let (ndotl, inv_d) = if dist2 > MIN_LENGTH2 {
+        let inv_d = 1.0 / dist2.sqrt();
+        (n.dot(to_light) * inv_d, inv_d)
+    } else {
+        // The light at the point: lit along the normal.
+        (n.dot(n), 0.0)
+    };
+    if !(ndotl > 0.0) {
+        return Vec3::ZERO;
+    }
+    let att = falloff(dist2, light.radius, effects);
+    let l = if dist2 > MIN_LENGTH2 { to_light * inv_d } else { n };
+    brdf_radiance::<SPECULAR>(p, n, l, ndotl, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
 }
 
 /// Radiance from `p` lit from the unit direction `to_light` (view space) with irradiance
@@ -298,18 +313,18 @@ pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, s
 #[allow(clippy::too_many_arguments)]
 pub fn shade_directional<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, to_light: Vec3, colour: Vec3, intensity: f32, effects: u32) -> Vec3 {
     let n = normalize_or(n, Vec3::ZERO);
-    brdf_radiance::<SPECULAR>(p, n, to_light, albedo, specular, roughness, 1.0, intensity, colour, effects)
-}
-
-/// The BRDF part of [`shade_variant`] and [`shade_directional`]: unit normal `n`, unit direction
-/// to the light `l`, attenuation `att`.
-#[inline]
-#[allow(clippy::too_many_arguments)]
-fn brdf_radiance<const SPECULAR: bool>(p: Vec3, n: Vec3, l: Vec3, albedo: Vec3, specular: f32, roughness: f32, att: f32, intensity: f32, colour: Vec3, effects: u32) -> Vec3 {
-    let ndotl = n.dot(l);
+    let ndotl = n.dot(to_light);
     if !(ndotl > 0.0) {
         return Vec3::ZERO;
     }
+    brdf_radiance::<SPECULAR>(p, n, to_light, ndotl, albedo, specular, roughness, 1.0, intensity, colour, effects)
+}
+
+/// The BRDF part of [`shade_variant`] and [`shade_directional`]: unit normal `n`, unit direction
+/// to the light `l` (read by the specular lobe only), `ndotl = n·l > 0`, attenuation `att`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn brdf_radiance<const SPECULAR: bool>(p: Vec3, n: Vec3, l: Vec3, ndotl: f32, albedo: Vec3, specular: f32, roughness: f32, att: f32, intensity: f32, colour: Vec3, effects: u32) -> Vec3 {
     let mut spec = 0.0;
     if SPECULAR && effects & EFFECT_SPECULAR != 0 && specular > 0.0 {
         let ks = if specular < 1.0 { specular } else { 1.0 };
