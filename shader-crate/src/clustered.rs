@@ -290,9 +290,9 @@ pub fn cluster_light_counts(
 /// 6–7 (both assignments). The start of a cluster's list of `n` lights in the global list: `n`
 /// entries reserved with one atomic add on [`COUNTER_LIGHT_REFS`], which ends the pass as the
 /// frame's total of light references (the host grows the list when it exceeds the capacity: the
-/// naive fill pass then writes nothing, the BVH assignment no list that would end past it). Lists land in the order the clusters reserve them;
-/// each cluster's own list is in light order whatever that order, and shading reads it through
-/// its offset and count. One atomic per cluster instead of a device-wide scan of the counts
+/// naive fill pass then writes nothing, the BVH assignment no list that would end past it).
+/// Lists land in the order the clusters reserve them; each cluster's own list is in light order
+/// whatever that order, and shading reads it through its offset and count. One atomic per cluster instead of a device-wide scan of the counts
 /// (seven dependent dispatches on the H200: 6 µs each).
 #[inline]
 pub fn reserve_list(counters: &mut [u32], n: u32) -> u32 {

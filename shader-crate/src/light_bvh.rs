@@ -220,11 +220,10 @@ pub fn inner_node_box(nodes: &[ClusterAabb], n: u32, b: u32, level: u32, node: u
     bx
 }
 
-/// Whether light `s` of the sorted order meets `cluster`.
+/// Whether a light's sphere meets `cluster`: the one leaf test of both walks.
 #[inline]
-fn light_hits(spheres: &[LightSphere], s: u32, cluster: &ClusterAabb) -> bool {
-    let light = spheres[s as usize];
-    lighting::sphere_intersects_aabb(Vec3::from_array(light.position), light.radius, cluster)
+fn sphere_hits(sphere: &LightSphere, cluster: &ClusterAabb) -> bool {
+    lighting::sphere_intersects_aabb(Vec3::from_array(sphere.position), sphere.radius, cluster)
 }
 
 /// Lights (indices, via `order`) whose sphere meets `cluster`, found by walking the tree with one
@@ -275,7 +274,7 @@ pub fn for_each_bvh_light(
             while s0 < last {
                 unroll8!(u => {
                     let s = s0 + u;
-                    if s < last && light_hits(spheres, s, cluster) {
+                    if s < last && sphere_hits(&spheres[s as usize], cluster) {
                         emit(found, order[s as usize]);
                         found += 1;
                     }
@@ -388,8 +387,7 @@ impl LeafSlot {
             return found;
         }
         // The tests are combined with `&` (a short-circuit chain here miscompiled on lavapipe).
-        let sphere = lighting::sphere_intersects_aabb(Vec3::from_array(self.sphere.position), self.sphere.radius, cluster);
-        let hit = self.valid & sphere & crate::light_types::spot_may_meet(effects, lights, n, self.light, c0, r0);
+        let hit = self.valid & sphere_hits(&self.sphere, cluster) & crate::light_types::spot_may_meet(effects, lights, n, self.light, c0, r0);
         let vote = c.ballot(hit);
         if hit {
             emit(found + ballot_rank(vote, c.lane()), self.light);

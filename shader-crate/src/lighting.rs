@@ -291,18 +291,18 @@ pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, s
         return Vec3::ZERO;
     }
     let to_light = c - p;
-    let (ndotl, inv_d) = if dist2 > MIN_LENGTH2 {
+    // `l` is read by the specular lobe only: the diffuse variant compiles it away.
+    let (ndotl, l) = if dist2 > MIN_LENGTH2 {
         let inv_d = 1.0 / dist2.sqrt();
-        (n.dot(to_light) * inv_d, inv_d)
+        (n.dot(to_light) * inv_d, to_light * inv_d)
     } else {
         // The light at the point: lit along the normal.
-        (n.dot(n), 0.0)
+        (n.dot(n), n)
     };
     if !(ndotl > 0.0) {
         return Vec3::ZERO;
     }
     let att = falloff(dist2, light.radius, effects);
-    let l = if dist2 > MIN_LENGTH2 { to_light * inv_d } else { n };
     brdf_radiance::<SPECULAR>(p, n, l, ndotl, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
 }
 

@@ -2,6 +2,7 @@
 //! Compiles on the CPU too (entry points are plain functions there) but must not be called there:
 //! spirv-std's `gpu_only` intrinsics panic off the GPU.
 use super::Coop;
+use spirv_std::memory::Semantics;
 
 /// Built-ins of one invocation, unpacked by the `#[spirv]` entry point.
 #[derive(Clone, Copy)]
@@ -53,20 +54,19 @@ impl Coop for GpuCoop {
     }
     #[inline]
     fn subgroup_barrier(&self) {
-        use spirv_std::memory::{Scope, Semantics};
-        spirv_std::arch::control_barrier::<
-            { Scope::Subgroup as u32 },
-            { Scope::Subgroup as u32 },
-            { Semantics::WORKGROUP_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() },
-        >();
+        subgroup_barrier_over::<{ Semantics::WORKGROUP_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() }>();
     }
     #[inline]
     fn subgroup_storage_barrier(&self) {
-        use spirv_std::memory::{Scope, Semantics};
-        spirv_std::arch::control_barrier::<
-            { Scope::Subgroup as u32 },
-            { Scope::Subgroup as u32 },
-            { Semantics::UNIFORM_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() },
-        >();
+        subgroup_barrier_over::<{ Semantics::UNIFORM_MEMORY.bits() | Semantics::ACQUIRE_RELEASE.bits() }>();
     }
+}
+
+/// Control barrier over the subgroup with memory semantics `SEMANTICS` (acquire/release of
+/// workgroup or of uniform memory): [`Coop::subgroup_barrier`] and
+/// [`Coop::subgroup_storage_barrier`].
+#[inline]
+fn subgroup_barrier_over<const SEMANTICS: u32>() {
+    use spirv_std::memory::Scope;
+    spirv_std::arch::control_barrier::<{ Scope::Subgroup as u32 }, { Scope::Subgroup as u32 }, SEMANTICS>();
 }
