@@ -68,7 +68,7 @@ fn distributions(scene: &Scene, n: usize) -> [(&'static str, Vec<PointLight>); 2
 }
 
 fn bvh(c: &mut Criterion) {
-    let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device");
+    let gpu = Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok(), ..Default::default() }).expect("a Vulkan device");
     eprintln!("device: {}", gpu.ctx.info.line());
     let llvmpipe = gpu.ctx.info.is_llvmpipe();
     let scene = Scene::load("city", std::path::Path::new(".")).expect("city");

@@ -78,7 +78,7 @@ const DISTRIBUTIONS: [Distribution; 2] = [("uniform", uniform), ("clustered", cl
 const GPU_SIZES: [usize; 5] = [1_000, 64_000, 1_000_000, 4_000_000, 16_000_000];
 
 fn open_gpu() -> Gpu {
-    Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok() }).expect("a Vulkan device")
+    Gpu::new(&ContextOptions { validation: false, device: std::env::var("MANYLIGHTS_DEVICE").ok(), ..Default::default() }).expect("a Vulkan device")
 }
 
 /// The GPU sizes that fit one storage-buffer binding of the device.

@@ -77,10 +77,10 @@ fn device_selection_by_name_and_clear_errors() {
     let name = gpu.ctx.info.name.clone();
     // A case-insensitive substring of the chosen device's name selects it.
     let part: String = name.chars().take(4).collect::<String>().to_uppercase();
-    let again = host::gpu::Gpu::new(&ContextOptions { validation: true, device: Some(part) }).unwrap();
+    let again = host::gpu::Gpu::new(&ContextOptions { validation: true, device: Some(part), ..Default::default() }).unwrap();
     assert_eq!(again.ctx.info.name, name);
     // An unknown name is an error that lists the devices present.
-    let err = host::gpu::Gpu::new(&ContextOptions { validation: false, device: Some("no-such-device-xyz".into()) })
+    let err = host::gpu::Gpu::new(&ContextOptions { validation: false, device: Some("no-such-device-xyz".into()), ..Default::default() })
         .err()
         .expect("must fail")
         .to_string();

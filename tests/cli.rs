@@ -133,6 +133,29 @@ fn render_times_each_dispatch_on_request() {
     }
 }
 
+/// `--kernel-stats` lists what the driver compiled each kernel that ran to, one line per kernel
+/// executable, or says in one line that the device cannot tell; either way the render succeeds
+/// without a validation message.
+#[test]
+fn render_reports_kernel_statistics_or_why_not() {
+    let dir = TempDir::new("cli-kernel-stats");
+    let png = dir.join("city.png");
+    let (ok, _, err) = manylights(&[
+        "render", "--scene", "city", "--lights", "300", "--width", "64", "--height", "36", "--frames", "1",
+        "--technique", "clustered-bvh", "--kernel-stats", "--out", png.to_str().unwrap(),
+    ]);
+    assert!(ok, "render failed:\n{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("kernel ") && l.contains("): ")).collect();
+    if err.contains("kernel statistics: ") {
+        assert!(err.contains("does not offer VK_KHR_pipeline_executable_properties"), "names the missing extension:\n{err}");
+        assert!(lines.is_empty(), "no statistics from a device that cannot give them:\n{err}");
+    } else {
+        for kernel in ["clustered::pixel_keys", "clustered::shade_clustered"] {
+            assert!(lines.iter().any(|l| l.starts_with(&format!("kernel {kernel}"))), "{kernel} listed:\n{err}");
+        }
+    }
+}
+
 /// `--fp-lists array` reaches Forward+ and its stats: the layout is named and the array's
 /// buffers are listed.
 #[test]

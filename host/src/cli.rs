@@ -31,6 +31,10 @@ pub struct DeviceArgs {
     /// The variable takes 1/0, true/false, yes/no, on/off.
     #[arg(long, global = true, env = "MANYLIGHTS_VALIDATION", value_parser = clap::builder::BoolishValueParser::new())]
     pub validation: bool,
+    /// Print what the driver compiled each compute kernel to (registers, binary size; where the
+    /// device offers VK_KHR_pipeline_executable_properties).
+    #[arg(long, global = true)]
+    pub kernel_stats: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -72,7 +76,7 @@ pub(crate) fn open_for_display(dev: &DeviceArgs, display: raw_window_handle::Raw
 }
 
 fn open_with(dev: &DeviceArgs, display: Option<raw_window_handle::RawDisplayHandle>) -> Result<Gpu> {
-    let opts = ContextOptions { validation: dev.validation, device: dev.device.clone() };
+    let opts = ContextOptions { validation: dev.validation, device: dev.device.clone(), kernel_statistics: dev.kernel_stats };
     let gpu = match display {
         Some(d) => Gpu::for_display(&opts, d),
         None => Gpu::new(&opts),
@@ -88,11 +92,24 @@ fn open_with(dev: &DeviceArgs, display: Option<raw_window_handle::RawDisplayHand
         }
     })?;
     eprintln!("device: {}", gpu.ctx.info.line());
+    if dev.kernel_stats && gpu.ctx.kernel_statistics.is_none() {
+        eprintln!("kernel statistics: {} does not offer VK_KHR_pipeline_executable_properties", gpu.ctx.info.name);
+    }
     Ok(gpu)
 }
 
-/// Fails when validation reported anything.
+/// `--kernel-stats`: one line per compiled kernel executable, in the order they were made.
+fn print_kernel_statistics(gpu: &Gpu) {
+    if let Some(list) = &gpu.ctx.kernel_statistics {
+        for k in list.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+            eprintln!("kernel {}", k.line());
+        }
+    }
+}
+
+/// Prints the kernel statistics (`--kernel-stats`); fails when validation reported anything.
 pub(crate) fn finish(gpu: &Gpu) -> Result<()> {
+    print_kernel_statistics(gpu);
     let msgs = gpu.ctx.take_validation_messages();
     if !msgs.is_empty() {
         for m in &msgs {

@@ -145,6 +145,7 @@ mod tests {
             max_workgroup_invocations: 1024,
             graphics_family: 0,
             async_compute_family: None,
+            kernel_statistics: false,
         }
     }
 

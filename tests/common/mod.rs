@@ -28,7 +28,7 @@ use host::vk::ContextOptions;
 
 /// A validated GPU context (device: `MANYLIGHTS_DEVICE`, else the best usable one).
 pub fn gpu() -> Gpu {
-    let opts = ContextOptions { validation: true, device: std::env::var("MANYLIGHTS_DEVICE").ok() };
+    let opts = ContextOptions { validation: true, device: std::env::var("MANYLIGHTS_DEVICE").ok(), ..Default::default() };
     match Gpu::new(&opts) {
         Ok(g) => {
             assert_clean(&g);

@@ -3,6 +3,7 @@
 use super::device::{self, DeviceInfo};
 use super::error::{CallContext, VkError, VkResult};
 use super::instance::Instance;
+use super::kernel_stats::KernelStatistics;
 use super::pipeline::Recorder;
 use super::profiler::Profiler;
 use ash::{ext, khr, vk};
@@ -17,6 +18,9 @@ pub struct ContextOptions {
     pub validation: bool,
     /// Case-insensitive substring of the device name to use.
     pub device: Option<String>,
+    /// Record what the driver compiled each compute kernel to (`vk::kernel_stats`), where the
+    /// device can say.
+    pub kernel_statistics: bool,
 }
 
 pub struct Shared {
@@ -32,6 +36,10 @@ pub struct Shared {
     command_pool: Mutex<vk::CommandPool>,
     /// Command pool of the async-compute family (with `async_compute_queue`).
     async_command_pool: Option<Mutex<vk::CommandPool>>,
+    /// The kernels' compiled statistics, with `ContextOptions::kernel_statistics` on a device
+    /// that reports them (`vk::kernel_stats`).
+    pub kernel_statistics: Option<Mutex<Vec<KernelStatistics>>>,
+    pub(crate) executable_properties: Option<khr::pipeline_executable_properties::Device>,
     /// Dropped last (after `Drop::drop` destroyed the device).
     pub instance: Instance,
 }
@@ -66,7 +74,8 @@ impl Context {
         let instance = Instance::with_extensions(opts.validation, surface_exts)?;
         let (physical, mut info) = device::select(&instance.raw, opts.device.as_deref())?;
         info.timestamps_across_queues = device::device_time_domain(&instance.entry, &instance.raw, physical, &info);
-        let device = device::create(&instance.raw, physical, &info, display.is_some())?;
+        let kernel_statistics = opts.kernel_statistics && info.kernel_statistics;
+        let device = device::create(&instance.raw, physical, &info, display.is_some(), kernel_statistics)?;
         let queue = unsafe { device.get_device_queue(info.graphics_family, 0) };
         let async_compute_queue =
             info.async_compute_family.map(|f| Mutex::new(unsafe { device.get_device_queue(f, 0) }));
@@ -91,6 +100,8 @@ impl Context {
             None => None,
         };
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &device);
+        let executable_properties =
+            kernel_statistics.then(|| khr::pipeline_executable_properties::Device::new(&instance.raw, &device));
         let debug_utils = instance.debug_utils.then(|| ext::debug_utils::Device::new(&instance.raw, &device));
         Ok(Self(Arc::new(Shared {
             physical,
@@ -103,6 +114,8 @@ impl Context {
             debug_utils,
             command_pool: Mutex::new(command_pool),
             async_command_pool,
+            kernel_statistics: kernel_statistics.then(|| Mutex::new(Vec::new())),
+            executable_properties,
             instance,
         })))
     }

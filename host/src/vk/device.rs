@@ -47,6 +47,9 @@ pub struct DeviceInfo {
     pub graphics_family: u32,
     /// A compute-only queue family ("async compute"), when the device has one.
     pub async_compute_family: Option<u32>,
+    /// The driver reports what it compiled each kernel to (`VK_KHR_pipeline_executable_properties`:
+    /// registers, sizes; `vk::kernel_stats`).
+    pub kernel_statistics: bool,
 }
 
 impl DeviceInfo {
@@ -116,7 +119,8 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     let p = props2.properties;
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12).push_next(&mut f13);
+    let mut exe = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12).push_next(&mut f13).push_next(&mut exe);
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     let f10 = f2.features;
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
@@ -124,6 +128,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         .call("vkEnumerateDeviceExtensionProperties")?;
     let has_push = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(khr::push_descriptor::NAME));
     let calibrated_timestamps_ext = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::calibrated_timestamps::NAME));
+    let kernel_statistics = super::kernel_stats::supported(&exts, &exe);
 
     let gfx = families.iter().position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
     let async_compute = families
@@ -160,6 +165,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         max_workgroup_invocations: p.limits.max_compute_work_group_invocations,
         graphics_family: gfx.unwrap_or(0) as u32,
         async_compute_family: async_compute.map(|f| f as u32),
+        kernel_statistics,
     };
     let mut missing = Vec::new();
     if p.api_version < vk::API_VERSION_1_3 {
@@ -256,8 +262,9 @@ pub fn select(instance: &ash::Instance, wanted: Option<&str>) -> VkResult<(vk::P
 }
 
 /// Creates the logical device with the features the kernels need; returns it and its queues.
-/// With `swapchain`, `VK_KHR_swapchain` is enabled too (a window's presentation).
-pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo, swapchain: bool) -> VkResult<ash::Device> {
+/// With `swapchain`, `VK_KHR_swapchain` is enabled too (a window's presentation); with
+/// `kernel_statistics` (where `info.kernel_statistics`), `VK_KHR_pipeline_executable_properties`.
+pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInfo, swapchain: bool, kernel_statistics: bool) -> VkResult<ash::Device> {
     let priorities = [1.0f32];
     let mut queues = vec![vk::DeviceQueueCreateInfo::default()
         .queue_family_index(info.graphics_family)
@@ -277,11 +284,18 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
         .shader_demote_to_helper_invocation(true);
     let f10 = vk::PhysicalDeviceFeatures::default().shader_int64(true).fragment_stores_and_atomics(true).geometry_shader(true).independent_blend(true);
     let mut f2 = vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut f12).push_next(&mut f13);
-    let exts = [khr::push_descriptor::NAME.as_ptr(), khr::swapchain::NAME.as_ptr()];
-    let exts = &exts[..1 + usize::from(swapchain)];
+    let mut exe = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(true);
+    let mut exts = vec![khr::push_descriptor::NAME.as_ptr()];
+    if swapchain {
+        exts.push(khr::swapchain::NAME.as_ptr());
+    }
+    if kernel_statistics {
+        exts.push(khr::pipeline_executable_properties::NAME.as_ptr());
+        f2 = f2.push_next(&mut exe);
+    }
     let create = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
-        .enabled_extension_names(exts)
+        .enabled_extension_names(&exts)
         .push_next(&mut f2);
     unsafe { instance.create_device(pd, &create, None) }.call("vkCreateDevice")
 }

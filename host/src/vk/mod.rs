@@ -9,6 +9,7 @@
 //! | `memory.rs` | buffers (`gpu-allocator`), upload/read-back, barriers |
 //! | `pipeline.rs` | shader modules, typed compute pipelines, the dispatch recorder |
 //! | `profiler.rs` | GPU timestamps per pass |
+//! | `kernel_stats.rs` | what the driver compiled each kernel to (registers, sizes) |
 //! | `raster.rs` | typed graphics pipelines (dynamic rendering, vertex pulling), target formats |
 //! | `draw.rs` | raster recording: target transitions, rendering, indexed draws, target copies |
 //! | `present.rs` | a window's surface and swapchain, frames copied into it (the viewer) |
@@ -19,6 +20,7 @@ pub mod draw;
 pub mod error;
 pub mod image;
 pub mod instance;
+pub mod kernel_stats;
 pub mod light_typed;
 pub mod memory;
 pub mod overlay;
@@ -29,6 +31,7 @@ pub mod raster;
 
 pub use context::{Context, ContextOptions};
 pub use device::DeviceInfo;
+pub use kernel_stats::KernelStatistics;
 pub use error::{VkError, VkResult};
 pub use image::{Image, Sampler};
 pub use memory::{Buffer, MemoryLocation};

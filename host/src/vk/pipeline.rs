@@ -163,6 +163,7 @@ impl<P: Pod> ComputePipeline<P> {
             }
         };
         ctx.set_name(raw, kernel.entry);
+        super::kernel_stats::capture(ctx, info, kernel.entry);
         Ok(Self { ctx: ctx.clone(), raw, layout, set_layout, kernel })
     }
 }
