@@ -5,7 +5,7 @@
 //! shader ([`crate::raster_forward`]); the linear non-shading kernels use [`linear_index`] too.
 //!
 //! * **Pixel** — [`linear_index`]: element of a 2D-folded linear dispatch; [`block_pixel`]: pixel
-//!   of a dispatch of 32×8 blocks (the cluster-list shading kernels).
+//!   of a dispatch of 32×8 blocks in 8×4 footprints (the cluster-list shading kernels).
 //! * **Surface** — [`fetch_surface`]: depth → view position ([`pixel_position`]), the G-buffer
 //!   normal at any precision ([`gbuffer_normal`]: 1 word per pixel octahedral, 4 words float32),
 //!   albedo and material ([`gbuffer_albedo`]).
@@ -59,24 +59,49 @@ pub fn linear_index(wg: UVec3, num_wg: UVec3, local: u32) -> u32 {
     (wg.y * num_wg.x + wg.x) * LINEAR_WORKGROUP + local
 }
 
-/// Width in pixels of the block a cluster-list shading workgroup covers ([`block_pixel`]): one
-/// 32-pixel row per subgroup of 32.
+/// Width in pixels of the block a cluster-list shading workgroup covers ([`block_pixel`]).
 pub const BLOCK_WIDTH: u32 = 32;
-/// Height of that block: the workgroup's [`LINEAR_WORKGROUP`] invocations in rows of
-/// [`BLOCK_WIDTH`].
+/// Height of that block: the workgroup's [`LINEAR_WORKGROUP`] invocations.
 pub const BLOCK_HEIGHT: u32 = LINEAR_WORKGROUP / BLOCK_WIDTH;
+/// Width of the footprint of 32 consecutive invocations inside a block ([`block_pixel`]).
+pub const FOOTPRINT_WIDTH: u32 = 8;
+/// Height of that footprint.
+pub const FOOTPRINT_HEIGHT: u32 = 4;
+const FOOTPRINT: u32 = FOOTPRINT_WIDTH * FOOTPRINT_HEIGHT;
+const _: () = assert!(
+    BLOCK_WIDTH.is_multiple_of(FOOTPRINT_WIDTH) && BLOCK_HEIGHT.is_multiple_of(FOOTPRINT_HEIGHT) && FOOTPRINT == 32,
+    "footprints of 32 invocations tile the block"
+);
 /// What [`block_pixel`] returns for an invocation outside the frame.
 pub const NO_PIXEL: u32 = u32::MAX;
 
 /// Pixel (row-major index) of invocation `local` of workgroup `wg` in a dispatch of
-/// `BLOCK_WIDTH × BLOCK_HEIGHT` blocks, or [`NO_PIXEL`] past the frame's edge. A block's rows
-/// lie in one column of cluster tiles (32 px wide by default), so a workgroup's subgroups walk
-/// the same few light lists and read the same lights, from the same SM's cache; in a linear
-/// dispatch each of a workgroup's 256-pixel row runs crosses eight tiles.
+/// `BLOCK_WIDTH × BLOCK_HEIGHT` blocks, or [`NO_PIXEL`] past the frame's edge.
+///
+/// A block lies in one column of cluster tiles (32 px wide by default), so a workgroup's
+/// subgroups walk the same few light lists and read the same lights, from the same SM's cache.
+/// Inside it each run of 32 consecutive invocations (a subgroup of 32, or half of one of 64)
+/// takes an 8 × 4 footprint instead of a 32-pixel row:
+///
+/// ```text
+///  block 32 × 8:  x →  0       8       16      24      32
+///                    ┌───────┬───────┬───────┬───────┐
+///                    │ 0–31  │ 32–63 │ 64–95 │ 96–127│  y 0–3   (invocations; each
+///                    ├───────┼───────┼───────┼───────┤           footprint row-major)
+///                    │128–159│160–191│192–223│224–255│  y 4–7
+///                    └───────┴───────┴───────┴───────┘
+/// ```
+///
+/// The shading loop runs a light's full evaluation whenever any lane keeps it, so the lanes'
+/// pixels should lie close together: on the H200 (Sponza 1080p, `clustered-bvh`) the footprint
+/// took shading from 0.162 to 0.152 ms at 10k lights and from 0.379 to 0.343 at 1M against rows
+/// of 32. Any mapping of invocations to lanes stays correct; this one only makes it faster.
 #[inline]
 pub fn block_pixel(wg: UVec3, local: u32, width: u32, height: u32) -> u32 {
-    let x = wg.x * BLOCK_WIDTH + local % BLOCK_WIDTH;
-    let y = wg.y * BLOCK_HEIGHT + local / BLOCK_WIDTH;
+    let (footprint, k) = (local / FOOTPRINT, local % FOOTPRINT);
+    let per_row = BLOCK_WIDTH / FOOTPRINT_WIDTH;
+    let x = wg.x * BLOCK_WIDTH + (footprint % per_row) * FOOTPRINT_WIDTH + k % FOOTPRINT_WIDTH;
+    let y = wg.y * BLOCK_HEIGHT + (footprint / per_row) * FOOTPRINT_HEIGHT + k / FOOTPRINT_WIDTH;
     if x < width && y < height {
         y * width + x
     } else {

@@ -227,3 +227,32 @@ fn spots_and_directional_lights_follow_the_model() {
     }
     assert!(cut, "the cones cut some light");
 }
+
+/// `block_pixel` covers every pixel of a frame exactly once, at sizes that are and are not
+/// multiples of the block and of the footprint, and each run of 32 invocations takes an 8 × 4
+/// footprint.
+#[test]
+fn block_pixels_cover_the_frame_once_in_footprints() {
+    for (w, h) in [(32u32, 8u32), (64, 16), (33, 9), (7, 3), (100, 37), (1, 1)] {
+        let mut seen = vec![0u32; (w * h) as usize];
+        let (gx, gy) = (w.div_ceil(BLOCK_WIDTH), h.div_ceil(BLOCK_HEIGHT));
+        for y in 0..gy {
+            for x in 0..gx {
+                for local in 0..LINEAR_WORKGROUP {
+                    let i = block_pixel(UVec3::new(x, y, 0), local, w, h);
+                    if i != NO_PIXEL {
+                        seen[i as usize] += 1;
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1), "{w}×{h}: every pixel once");
+    }
+    let (w, h) = (64, 16);
+    for run in 0..LINEAR_WORKGROUP / 32 {
+        let px: Vec<(u32, u32)> = (0..32).map(|k| block_pixel(UVec3::new(1, 1, 0), run * 32 + k, w, h)).map(|i| (i % w, i / w)).collect();
+        let (x0, y0) = (px.iter().map(|p| p.0).min().unwrap(), px.iter().map(|p| p.1).min().unwrap());
+        let (x1, y1) = (px.iter().map(|p| p.0).max().unwrap(), px.iter().map(|p| p.1).max().unwrap());
+        assert_eq!((x1 - x0 + 1, y1 - y0 + 1), (FOOTPRINT_WIDTH, FOOTPRINT_HEIGHT), "run {run}");
+    }
+}
