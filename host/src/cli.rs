@@ -100,8 +100,8 @@ fn open_with(dev: &DeviceArgs, display: Option<raw_window_handle::RawDisplayHand
 
 /// `--kernel-stats`: one line per compiled kernel executable, in the order they were made.
 fn print_kernel_statistics(gpu: &Gpu) {
-    if let Some(list) = &gpu.ctx.kernel_statistics {
-        for k in list.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+    if let Some(capture) = &gpu.ctx.kernel_statistics {
+        for k in capture.statistics() {
             eprintln!("kernel {}", k.line());
         }
     }

@@ -3,7 +3,7 @@
 use super::device::{self, DeviceInfo};
 use super::error::{CallContext, VkError, VkResult};
 use super::instance::Instance;
-use super::kernel_stats::KernelStatistics;
+use super::kernel_stats::Capture;
 use super::pipeline::Recorder;
 use super::profiler::Profiler;
 use ash::{ext, khr, vk};
@@ -38,8 +38,7 @@ pub struct Shared {
     async_command_pool: Option<Mutex<vk::CommandPool>>,
     /// The kernels' compiled statistics, with `ContextOptions::kernel_statistics` on a device
     /// that reports them (`vk::kernel_stats`).
-    pub kernel_statistics: Option<Mutex<Vec<KernelStatistics>>>,
-    pub(crate) executable_properties: Option<khr::pipeline_executable_properties::Device>,
+    pub kernel_statistics: Option<Capture>,
     /// Dropped last (after `Drop::drop` destroyed the device).
     pub instance: Instance,
 }
@@ -100,8 +99,7 @@ impl Context {
             None => None,
         };
         let push_descriptor = khr::push_descriptor::Device::new(&instance.raw, &device);
-        let executable_properties =
-            kernel_statistics.then(|| khr::pipeline_executable_properties::Device::new(&instance.raw, &device));
+        let kernel_statistics = kernel_statistics.then(|| Capture::new(&instance.raw, &device));
         let debug_utils = instance.debug_utils.then(|| ext::debug_utils::Device::new(&instance.raw, &device));
         Ok(Self(Arc::new(Shared {
             physical,
@@ -114,8 +112,7 @@ impl Context {
             debug_utils,
             command_pool: Mutex::new(command_pool),
             async_command_pool,
-            kernel_statistics: kernel_statistics.then(|| Mutex::new(Vec::new())),
-            executable_properties,
+            kernel_statistics,
             instance,
         })))
     }

@@ -101,9 +101,16 @@ fn version(v: u32) -> String {
     format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
 }
 
-fn cstr(bytes: &[std::ffi::c_char]) -> String {
-    // SAFETY: Vulkan fixed-size strings are NUL-terminated within their array.
-    unsafe { CStr::from_ptr(bytes.as_ptr()) }.to_string_lossy().into_owned()
+/// A Vulkan fixed-size string (NUL-terminated within its array; a missing NUL gives the whole
+/// array).
+pub(super) fn cstr(bytes: &[std::ffi::c_char]) -> String {
+    let bytes: Vec<u8> = bytes.iter().take_while(|&&c| c != 0).map(|&c| c as u8).collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// Whether `name` is among the device's extensions.
+fn has_extension(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
+    exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name))
 }
 
 /// Inspects one device: its info, its type rank, or why it cannot be used.
@@ -126,9 +133,9 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
         .call("vkEnumerateDeviceExtensionProperties")?;
-    let has_push = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(khr::push_descriptor::NAME));
-    let calibrated_timestamps_ext = exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::calibrated_timestamps::NAME));
-    let kernel_statistics = super::kernel_stats::supported(&exts, &exe);
+    let has_push = has_extension(&exts, khr::push_descriptor::NAME);
+    let calibrated_timestamps_ext = has_extension(&exts, ash::ext::calibrated_timestamps::NAME);
+    let kernel_statistics = has_extension(&exts, khr::pipeline_executable_properties::NAME) && exe.pipeline_executable_info == vk::TRUE;
 
     let gfx = families.iter().position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
     let async_compute = families

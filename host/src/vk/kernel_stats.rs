@@ -1,8 +1,7 @@
 //! What the driver's compiler made of each compute kernel (`VK_KHR_pipeline_executable_properties`):
 //! registers per invocation, binary size, local and shared memory, as the driver names them.
-//! Registers bound occupancy, and a latency-bound kernel (a chain of dependent loads per
-//! invocation, as in the shading kernels) runs as fast as the number of invocations resident per
-//! multiprocessor lets it: these are the numbers behind such a kernel's time.
+//! Registers bound occupancy (the invocations resident per multiprocessor), and with it how well
+//! a kernel hides its latencies; the binary size shows what unrolling and specialisation cost.
 //!
 //! Off unless asked for (`ContextOptions::kernel_statistics`). Statistics come from a second,
 //! throwaway pipeline of the same kernel created with `CAPTURE_STATISTICS_KHR`; the pipeline that
@@ -11,8 +10,10 @@
 //! timings taken with `--kernel-stats` stay the timings without it. Devices without the
 //! extension report none.
 use super::context::Context;
+use super::device::cstr;
+use ash::khr::pipeline_executable_properties;
 use ash::vk;
-use std::ffi::CStr;
+use std::sync::Mutex;
 
 /// One executable of one kernel's pipeline and the driver's statistics of it.
 #[derive(Clone, Debug)]
@@ -33,12 +34,6 @@ impl KernelStatistics {
     }
 }
 
-fn text(chars: &[std::ffi::c_char]) -> String {
-    // The driver fills a NUL-terminated array; a missing NUL gives the whole array.
-    let bytes: Vec<u8> = chars.iter().take_while(|&&c| c != 0).map(|&c| c as u8).collect();
-    String::from_utf8_lossy(&bytes).into_owned()
-}
-
 fn value(s: &vk::PipelineExecutableStatisticKHR<'_>) -> String {
     // SAFETY: `format` says which member of the union the driver wrote.
     unsafe {
@@ -52,11 +47,29 @@ fn value(s: &vk::PipelineExecutableStatisticKHR<'_>) -> String {
     }
 }
 
+/// A context's statistics: the extension's functions and what was read so far.
+pub struct Capture {
+    ext: pipeline_executable_properties::Device,
+    list: Mutex<Vec<KernelStatistics>>,
+}
+
+impl Capture {
+    /// On a device created with the extension and its `pipelineExecutableInfo` feature.
+    pub(crate) fn new(instance: &ash::Instance, device: &ash::Device) -> Self {
+        Self { ext: pipeline_executable_properties::Device::new(instance, device), list: Mutex::new(Vec::new()) }
+    }
+
+    /// The statistics read so far, in the order the kernels were made.
+    pub fn statistics(&self) -> Vec<KernelStatistics> {
+        self.list.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+}
+
 /// Compiles `info` once more with `CAPTURE_STATISTICS_KHR` and reads the statistics of every
 /// executable of that pipeline into the context's list, then destroys it. A failing call loses
 /// only the statistics.
 pub(crate) fn capture(ctx: &Context, info: vk::ComputePipelineCreateInfo<'_>, entry: &str) {
-    let (Some(list), Some(ext)) = (&ctx.kernel_statistics, &ctx.executable_properties) else { return };
+    let Some(Capture { ext, list }) = &ctx.kernel_statistics else { return };
     let info = info.flags(info.flags | vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR);
     // SAFETY: `info` is the create info of a pipeline that was just made from live objects.
     let pipeline = match unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) } {
@@ -68,27 +81,16 @@ pub(crate) fn capture(ctx: &Context, info: vk::ComputePipelineCreateInfo<'_>, en
     unsafe { ctx.device.destroy_pipeline(pipeline, None) };
 }
 
-fn read(
-    list: &std::sync::Mutex<Vec<KernelStatistics>>,
-    ext: &ash::khr::pipeline_executable_properties::Device,
-    pipeline: vk::Pipeline,
-    entry: &str,
-) {
+fn read(list: &Mutex<Vec<KernelStatistics>>, ext: &pipeline_executable_properties::Device, pipeline: vk::Pipeline, entry: &str) {
     let info = vk::PipelineInfoKHR::default().pipeline(pipeline);
-    // SAFETY: the extension and its feature are enabled whenever `executable_properties` is set.
+    // SAFETY: a `Capture` exists only on a device with the extension and its feature enabled.
     let Ok(executables) = (unsafe { ext.get_pipeline_executable_properties(&info) }) else { return };
     for (index, exe) in executables.iter().enumerate() {
         let exe_info = vk::PipelineExecutableInfoKHR::default().pipeline(pipeline).executable_index(index as u32);
         let Ok(stats) = (unsafe { ext.get_pipeline_executable_statistics(&exe_info) }) else { continue };
-        let values = stats.iter().map(|s| (text(&s.name), value(s))).collect();
-        let executable = text(&exe.name);
+        let values = stats.iter().map(|s| (cstr(&s.name), value(s))).collect();
+        let executable = cstr(&exe.name);
         let entry = entry.to_string();
         list.lock().unwrap_or_else(|e| e.into_inner()).push(KernelStatistics { entry, executable, values });
     }
-}
-
-/// Whether the device can report statistics: the extension and its `pipelineExecutableInfo`.
-pub(crate) fn supported(exts: &[vk::ExtensionProperties], feature: &vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR<'_>) -> bool {
-    let name: &CStr = ash::khr::pipeline_executable_properties::NAME;
-    exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name)) && feature.pipeline_executable_info == vk::TRUE
 }
