@@ -54,6 +54,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         async_compute: false,
         sort: Default::default(),
         fp_lists: Default::default(),
+        unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
     }

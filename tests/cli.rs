@@ -92,7 +92,7 @@ fn render_writes_png_and_stats() {
     let img = image::open(&png).expect("a readable PNG").to_rgba8();
     assert_eq!(img.dimensions(), (96, 54));
     let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-    for pass in ["gbuffer", "keys", "page table", "assignment", "shading"] {
+    for pass in ["gbuffer", "unique clusters", "assignment", "shading"] {
         let ms = stats["gpu_ms"]["passes"][pass].as_f64().unwrap_or(-1.0);
         assert!(ms.is_finite() && ms >= 0.0, "pass {pass}: {ms}");
     }
@@ -104,7 +104,8 @@ fn render_writes_png_and_stats() {
 }
 
 /// `--dispatch-times` times each command inside the passes as `pass · kernel` (in the stats
-/// and on stderr); without it only the passes are listed.
+/// and on stderr); without it only the passes are listed. `--unique-clusters` picks the kernels
+/// that find the unique clusters: the tile kernel (the default) or the page table's.
 #[test]
 fn render_times_each_dispatch_on_request() {
     let dir = TempDir::new("cli-dispatch-times");
@@ -122,14 +123,24 @@ fn render_times_each_dispatch_on_request() {
     };
     let (passes, _) = run(&[]);
     assert!(passes.keys().all(|k| !k.contains(" · ")), "no parts without the flag: {passes:?}");
-    let (passes, err) = run(&["--dispatch-times"]);
-    for part in ["keys · clustered::pixel_keys", "page table · clustered::allocate_pages", "page table · clustered::store_slots", "shading · "] {
-        let ms = passes.iter().find(|(k, _)| k.starts_with(part)).and_then(|(_, v)| v.as_f64());
-        assert!(ms.is_some_and(|ms| ms.is_finite() && ms >= 0.0), "part {part:?}: {passes:?}");
-        assert!(err.contains(part), "stderr lists {part:?}:\n{err}");
-    }
-    for pass in ["keys", "page table", "assignment", "shading"] {
-        assert!(passes[pass].is_number(), "the pass {pass} is still timed: {passes:?}");
+    let tiles = ["unique clusters · clustered::tile_clusters", "shading · clustered::shade_clustered_tiles"];
+    let pages = ["keys · clustered::pixel_keys", "page table · clustered::allocate_pages", "page table · clustered::store_slots"];
+    for (flags, parts, absent, timed) in [
+        (&["--dispatch-times"][..], &tiles[..], &pages[..], &["unique clusters", "assignment", "shading"][..]),
+        (&["--dispatch-times", "--unique-clusters", "page-table"], &pages, &tiles, &["keys", "page table", "assignment", "shading"]),
+    ] {
+        let (passes, err) = run(flags);
+        for part in parts {
+            let ms = passes.iter().find(|(k, _)| k.starts_with(part)).and_then(|(_, v)| v.as_f64());
+            assert!(ms.is_some_and(|ms| ms.is_finite() && ms >= 0.0), "{flags:?}: part {part:?}: {passes:?}");
+            assert!(err.contains(part), "{flags:?}: stderr lists {part:?}:\n{err}");
+        }
+        for part in absent {
+            assert!(!passes.keys().any(|k| k.starts_with(part)), "{flags:?}: {part:?} does not run: {passes:?}");
+        }
+        for pass in timed {
+            assert!(passes[*pass].is_number(), "{flags:?}: the pass {pass} is still timed: {passes:?}");
+        }
     }
 }
 
@@ -150,7 +161,7 @@ fn render_reports_kernel_statistics_or_why_not() {
         assert!(err.contains("does not offer VK_KHR_pipeline_executable_properties"), "names the missing extension:\n{err}");
         assert!(lines.is_empty(), "no statistics from a device that cannot give them:\n{err}");
     } else {
-        for kernel in ["clustered::pixel_keys", "clustered::shade_clustered"] {
+        for kernel in ["clustered::tile_clusters", "clustered::shade_clustered"] {
             assert!(lines.iter().any(|l| l.starts_with(&format!("kernel {kernel}"))), "{kernel} listed:\n{err}");
         }
     }

@@ -1,6 +1,6 @@
 //! Clustered deferred end to end on the local device (lavapipe in CI), validation on:
 //! the clustered image equals the brute-force deferred image (≤ 1/255 per channel after
-//! tonemapping), the page-table compaction equals the sorted unique keys, every pixel's list
+//! tonemapping), the unique clusters (tile path and page table) equal the distinct keys, every pixel's list
 //! holds every light touching it, and the hard cases stay finite and equal.
 mod common;
 use common::pixels::{lit, worst_channel};
@@ -10,6 +10,7 @@ use host::gpu::Gpu;
 use host::render::forward_plus::TileLists;
 use host::render::sort::SortKind;
 use host::render::transparent::OitVariant;
+use host::render::clustered::UniqueClusters;
 use host::render::{reference, Frame, Settings, Technique};
 use host::scene::{lights, Directional, Scene};
 use shaders::layout::PointLight;
@@ -21,9 +22,9 @@ fn settings(w: u32, h: u32, technique: Technique) -> Settings {
 }
 
 /// Renders with the reference and both clustered techniques (naive, and BVH at branchings 32 and
-/// 64 with the radix light sort, 32 with the bitonic one) and checks
-/// what the clustered pipeline guarantees (`reference::check`: page-table compaction, complete
-/// light lists); returns the naive clustered frame.
+/// 64 with the radix light sort, 32 with the bitonic one; unique clusters found by tiles and by
+/// the page table) and checks what the clustered pipeline guarantees (`reference::check`: the
+/// unique clusters, complete light lists); returns the naive clustered frame (tile path).
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Frame {
     assert_equal_to_reference_with(gpu, scene, lights, &settings(w, h, Technique::Deferred), what)
 }
@@ -53,20 +54,25 @@ fn assert_equal_to_reference_with(gpu: &Gpu, scene: &Scene, lights: &[PointLight
     let (w, h) = (base.width, base.height);
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let mut frames = Vec::new();
+    let (tiles, pages) = (UniqueClusters::Tiles, UniqueClusters::PageTable);
     let runs = [
-        (Technique::ClusteredNaive, 0, SortKind::Radix),
-        (Technique::ClusteredBvh, 32, SortKind::Radix),
-        (Technique::ClusteredBvh, 64, SortKind::Radix),
-        (Technique::ClusteredBvh, 32, SortKind::Bitonic),
+        (Technique::ClusteredNaive, 0, SortKind::Radix, tiles),
+        (Technique::ClusteredNaive, 0, SortKind::Radix, pages),
+        (Technique::ClusteredBvh, 32, SortKind::Radix, tiles),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, pages),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, tiles),
+        (Technique::ClusteredBvh, 32, SortKind::Bitonic, tiles),
     ];
-    for (technique, branching, sort) in runs {
-        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, ..settings(w, h, technique) });
+    for (technique, branching, sort, unique_clusters) in runs {
+        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, unique_clusters, ..settings(w, h, technique) });
+        let run = format!("{what}, {technique:?} (branching {branching}, {sort:?} sort, {unique_clusters:?})");
         let worst = worst_channel(&reference.pixels, &clustered.pixels);
-        assert!(worst <= 1, "{what}, {technique:?} (branching {branching}, {sort:?} sort): differs from deferred by {worst}/255");
-        reference::check(clustered.readback.as_ref().unwrap())
-            .unwrap_or_else(|e| panic!("{what}, {technique:?} (branching {branching}, {sort:?} sort): {e:#}"));
+        assert!(worst <= 1, "{run}: differs from deferred by {worst}/255");
+        reference::check(clustered.readback.as_ref().unwrap()).unwrap_or_else(|e| panic!("{run}: {e:#}"));
         frames.push(clustered);
     }
+    // Both ways of finding the unique clusters give the same image.
+    assert_eq!(frames[0].pixels, frames[1].pixels, "{what}: tile path and page table differ");
     common::assert_clean(gpu);
     frames.swap_remove(0)
 }

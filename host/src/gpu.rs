@@ -34,6 +34,9 @@ pub struct Kernels {
     pub cluster_light_fill: LightCompute<FrameParams>,
     /// Shading variants `[diffuse only, with specular]`: a scene runs only the one it needs.
     pub shade_clustered: [LightCompute<FrameParams>; 2],
+    /// The tile path of the unique clusters (`shaders::tile_clusters`) and its shading.
+    pub tile_clusters: ComputePipeline<TileClusterParams>,
+    pub shade_clustered_tiles: [LightCompute<FrameParams>; 2],
     pub shade_deferred: [LightCompute<FrameParams>; 2],
     pub scan_add_offsets: ComputePipeline<ScanFixParams>,
     pub radix_histogram: ComputePipeline<RadixParams>,
@@ -82,6 +85,11 @@ impl Kernels {
             shade_clustered: [
                 LightTyped::compute(light, kernels::SHADE_CLUSTERED_DIFFUSE),
                 LightTyped::compute(light, kernels::SHADE_CLUSTERED_SPECULAR),
+            ],
+            tile_clusters: ComputePipeline::new(ctx, module, kernels::TILE_CLUSTERS)?,
+            shade_clustered_tiles: [
+                LightTyped::compute(light, kernels::SHADE_CLUSTERED_TILES_DIFFUSE),
+                LightTyped::compute(light, kernels::SHADE_CLUSTERED_TILES_SPECULAR),
             ],
             shade_deferred: [
                 LightTyped::compute(light, kernels::SHADE_DEFERRED_DIFFUSE),
@@ -224,7 +232,7 @@ impl Gpu {
     /// its own): a scene of point lights creates only variant 0.
     pub fn light_type_variants(&self) -> std::collections::BTreeSet<usize> {
         let k = &self.kernels;
-        let frame = [&k.shade_clustered[..], &k.shade_deferred, &k.shade_aabb].into_iter().flatten().map(LightTyped::created);
+        let frame = [&k.shade_clustered[..], &k.shade_clustered_tiles, &k.shade_deferred, &k.shade_aabb].into_iter().flatten().map(LightTyped::created);
         let tiled = [&k.shade_tiled, &k.forward_plus_cull, &k.forward_plus_cull_widened].into_iter().flatten().map(LightTyped::created);
         let single = [k.cluster_light_counts.created(), k.cluster_light_fill.created(), k.aabb_assign.created()];
         let bvh = [k.assign_lights_bvh.created()];

@@ -71,6 +71,11 @@ pub struct RenderArgs {
     /// lavapipe).
     #[arg(long, value_enum, default_value_t = crate::render::forward_plus::TileLists::Array)]
     pub fp_lists: crate::render::forward_plus::TileLists,
+    /// How `clustered-naive` and `clustered-bvh` find the frame's unique clusters: `tiles` (one
+    /// workgroup per screen tile, one dispatch) or Karas' `page-table` (five dispatches; what
+    /// scenes with transparent draws always use).
+    #[arg(long, value_enum, default_value_t = crate::render::clustered::UniqueClusters::Tiles)]
+    pub unique_clusters: crate::render::clustered::UniqueClusters,
     /// How the transparent pass resolves each pixel's fragments (scenes with transparent
     /// materials): `exact` (every layer sorted), the `k1`/`k2`/`k4`/`k8` nearest sorted over an
     /// order-independent average of the rest, or `weighted` blended OIT (no lists, no sorting).
@@ -118,6 +123,7 @@ impl RenderArgs {
             async_compute: !self.no_async_compute,
             sort: self.sort,
             fp_lists: self.fp_lists,
+            unique_clusters: self.unique_clusters,
             oit: self.oit,
             dispatch_times: self.dispatch_times,
         }

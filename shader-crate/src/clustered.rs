@@ -29,6 +29,7 @@ use crate::light_lists::{lights_meeting, lights_meeting_spots};
 use crate::light_types::{box_sphere, EFFECT_SPOT};
 use crate::page_table::{self, INVALID_KEY};
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
+use crate::tile_clusters;
 use crate::{cluster_bounds, cluster_test, lighting};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
@@ -59,6 +60,81 @@ pub fn pixel_keys(
         if marks[page] == 0 {
             marks[page] = 1;
         }
+    }
+}
+
+/// 1–5 on the tile path ([`crate::tile_clusters`]), one workgroup per tile: the tile's pixel
+/// keys, its clusters (a mask of its slices) reserved in the unique-cluster list, their keys
+/// there, the tile's records for the shading's lookup, and the assignment's dispatch raised to
+/// cover them (one atomic add and one atomic maximum per tile). Workgroup (0, 0) zeroes the
+/// light-reference counter and the page count.
+#[spirv(compute(threads(256)))] // tile_clusters::TILE_WORKGROUP
+pub fn tile_clusters(
+    #[spirv(workgroup_id)] wg: UVec3,
+    #[spirv(local_invocation_index)] local_index: u32,
+    #[spirv(subgroup_size)] subgroup_size: u32,
+    #[spirv(subgroup_local_invocation_id)] lane: u32,
+    #[spirv(subgroup_id)] subgroup_id: u32,
+    #[spirv(num_subgroups)] num_subgroups: u32,
+    #[spirv(push_constant)] p: &TileClusterParams,
+    #[spirv(workgroup)] shared: &mut [u32; tile_clusters::SHARED_WORDS],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] bounds: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] keys: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] records: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] unique: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counters: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] args: &mut [u32],
+) {
+    use crate::light_lists::{AtomicAdd, AtomicMax};
+    let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
+    let g = &p.frame.grid;
+    let (i, j) = (wg.x, wg.y);
+    let rect = tile_clusters::tile_rect(g, i, j);
+    let words = tile_clusters::mask_words(g);
+    // Captured by value (`move`): a closure holding a reference to a local is a pointer that
+    // `spirv-val` may reject.
+    let to_keys = &mut *keys;
+    let slice_of = move |q: u32| {
+        let (px, py) = tile_clusters::tile_pixel(rect, q);
+        let at = py * g.width + px;
+        let key = page_table::pixel_key(g, bounds, px, py, depth[at as usize]);
+        to_keys[at as usize] = key;
+        if key == INVALID_KEY {
+            tile_clusters::NO_SLICE
+        } else {
+            g.unpack(key).2
+        }
+    };
+    let (per_group, a) = (p.per_group, ARGS_ASSIGNMENT as usize);
+    let (to_counters, to_args) = (&mut *counters, &mut *args);
+    let reserve = move |n: u32| {
+        let first = to_counters[COUNTER_UNIQUE_CLUSTERS as usize].fetch_add(n);
+        let (x, y) = tile_clusters::dispatch_raise(first + n, per_group);
+        to_args[a].fetch_max(x);
+        if y > 1 {
+            to_args[a + 1].fetch_max(y);
+        }
+        first
+    };
+    let (mask, first) = tile_clusters::tile_clusters(&c, shared, words, rect.2 * rect.3, slice_of, reserve);
+    if local_index < words {
+        let at = tile_clusters::record_at(g, i, j, local_index) as usize;
+        records[at] = mask;
+        records[at + 1] = first;
+        let (capacity, to_unique) = (p.frame.count, &mut *unique);
+        tile_clusters::emit_word_clusters(g, i, j, local_index, mask, first, move |n, key| {
+            if n < capacity {
+                to_unique[n as usize] = key;
+            }
+        });
+    }
+    if i == 0 && j == 0 && local_index == 0 {
+        counters[COUNTER_LIGHT_REFS as usize] = 0;
+        counters[COUNTER_PAGES as usize] = 0;
+        // Rows and depth of the dispatch: at least one each (more rows only past 65 535 groups).
+        args[a + 1].fetch_max(1);
+        args[a + 2].fetch_max(1);
     }
 }
 
@@ -186,7 +262,7 @@ pub fn scan_page_counts(
     }
     if local_index == 0 {
         counters[COUNTER_UNIQUE_CLUSTERS as usize] = total;
-        counters[COUNTER_STAGE_STRIDE as usize] = crate::clustered_bvh::stage_stride(p.stage_words, total);
+        counters[COUNTER_FRAME_CLUSTERS as usize] = total;
         store_args(args, p.args_offset, crate::indirect::dispatch_args(total, p.per_group));
     }
 }
@@ -362,6 +438,51 @@ specular_entries! {
             return;
         }
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
+        let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
+    }
+}
+
+specular_entries! {
+    shade_clustered_tiles_diffuse, shade_clustered_tiles_specular;
+    /// 8 on the tile path: per pixel, key → its tile's record → cluster → its list
+    /// ([`tile_clusters::cluster_of_key`]). The first invocation, the last reader of the
+    /// cluster counter and the assignment's dispatch, hands the count to the host
+    /// (`COUNTER_FRAME_CLUSTERS`) and zeroes both for the next frame's [`tile_clusters`].
+    fn shade_clustered_tiles_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] records: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] counters: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] args: &mut [u32],
+    ) {
+        if wg.x == 0 && wg.y == 0 && local == 0 {
+            tile_clusters::hand_over_counters(counters, args);
+        }
+        let p = &crate::light_types::specialise(p, light_types);
+        let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
+        if i == shading::NO_PIXEL {
+            return;
+        }
+        let key = keys[i as usize];
+        if key == INVALID_KEY {
+            frame[i as usize] = BACKGROUND_RGBA8;
+            return;
+        }
+        let cluster = tile_clusters::cluster_of_key(&p.grid, records, key) as usize;
         let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }

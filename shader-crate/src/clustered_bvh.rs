@@ -156,7 +156,7 @@ pub fn copy_staged<C: Coop>(c: &C, stage: &[u32], cl: u32, count: u32, stride: u
 }
 
 /// Step 3: the lights of each unique cluster, one subgroup per cluster, in one pass. The walk
-/// counts the lights and stages the first `counters[COUNTER_STAGE_STRIDE]` of them; lane 0
+/// counts the lights and stages the first [`stage_stride`] of them; lane 0
 /// reserves the list ([`crate::clustered::reserve_list`]); a staged list is then copied to its
 /// place (after a subgroup barrier on storage memory: a lane copies entries other lanes staged),
 /// a longer one walked again straight into it. A list that would end past the list's capacity
@@ -191,7 +191,7 @@ pub fn assign_lights_bvh(
     if cl >= p.frame.count || cl >= counters[COUNTER_UNIQUE_CLUSTERS as usize] {
         return;
     }
-    let stride = counters[COUNTER_STAGE_STRIDE as usize];
+    let stride = stage_stride(p.stage_words, counters[COUNTER_UNIQUE_CLUSTERS as usize]);
     let key = unique[cl as usize];
     // One walk in the code, run once (staging) or twice (the second straight into the list):
     // one inlined walk keeps the kernel as small as the two it replaces.

@@ -69,6 +69,12 @@ pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster
 pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
 pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 13);
 pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_specular", 13);
+/// The tile path of the unique clusters (`tile_clusters`): one workgroup per tile, and the
+/// shading that looks clusters up in the tiles' records.
+pub const TILE_CLUSTERS: Kernel<TileClusterParams> =
+    Kernel::new("clustered::tile_clusters", 7, [crate::tile_clusters::TILE_WORKGROUP, 1, 1], true);
+pub const SHADE_CLUSTERED_TILES_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_diffuse", 14);
+pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_specular", 14);
 
 // Brute-force deferred reference (`deferred.rs`).
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
@@ -162,6 +168,9 @@ pub const ALL: &[Kernel<()>] = &[
     CLUSTER_LIGHT_FILL.erased(),
     SHADE_CLUSTERED_DIFFUSE.erased(),
     SHADE_CLUSTERED_SPECULAR.erased(),
+    TILE_CLUSTERS.erased(),
+    SHADE_CLUSTERED_TILES_DIFFUSE.erased(),
+    SHADE_CLUSTERED_TILES_SPECULAR.erased(),
     SHADE_DEFERRED_DIFFUSE.erased(),
     SHADE_DEFERRED_SPECULAR.erased(),
     OIT_RESOLVE.erased(),

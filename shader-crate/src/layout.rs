@@ -305,9 +305,10 @@ impl View {
 pub const COUNTER_UNIQUE_CLUSTERS: u32 = 0;
 pub const COUNTER_LIGHT_REFS: u32 = 1;
 pub const COUNTER_PAGES: u32 = 2;
-/// `clustered-bvh`: words of the staged light lists per unique cluster this frame
-/// (`clustered_bvh::stage_stride`), stored by the page table's scan.
-pub const COUNTER_STAGE_STRIDE: u32 = 3;
+/// The frame's unique clusters as the host reads them after the frame: stored by the page
+/// table's scan beside `COUNTER_UNIQUE_CLUSTERS`, or, on the tile path (`tile_clusters`), by the
+/// shading kernel before it zeroes `COUNTER_UNIQUE_CLUSTERS` for the next frame's atomics.
+pub const COUNTER_FRAME_CLUSTERS: u32 = 3;
 pub const COUNTERS: u32 = 4;
 
 /// `scan_add_offsets`: the elements `0..count` its workgroups update.
@@ -325,9 +326,8 @@ const _: () = assert!(core::mem::size_of::<ScanFixParams>() == 16);
 /// allocated pages in `counters[COUNTER_PAGES]` and a dispatch of one workgroup per allocated
 /// page at word `args_offset` of the arguments buffer; `clustered::scan_page_counts` scans the
 /// allocated pages' slot counts, stores the unique clusters in
-/// `counters[COUNTER_UNIQUE_CLUSTERS]`, the assignment's dispatch (`per_group` clusters per
-/// workgroup) at word `args_offset`, and the staged lists' stride for `stage_words` words
-/// (`clustered_bvh::stage_stride`; 0 without staged lists) in `counters[COUNTER_STAGE_STRIDE]`.
+/// `counters[COUNTER_UNIQUE_CLUSTERS]` (and `COUNTER_FRAME_CLUSTERS`) and the assignment's
+/// dispatch (`per_group` clusters per workgroup) at word `args_offset`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
@@ -336,10 +336,29 @@ pub struct PageTableParams {
     pub capacity: u32,
     pub per_group: u32,
     pub args_offset: u32,
-    pub stage_words: u32,
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 4],
 }
 const _: () = assert!(core::mem::size_of::<PageTableParams>() == 32);
+
+/// Word offsets of the clustered chain's indirect dispatches (`VkDispatchIndirectCommand`s) in
+/// its arguments buffer: one workgroup per allocated page (the page table), and the assignment.
+pub const ARGS_PAGES: u32 = 0;
+pub const ARGS_ASSIGNMENT: u32 = 3;
+pub const ARGS_WORDS: u32 = 6;
+
+/// `clustered::tile_clusters` (`tile_clusters` module): the frame (`count`: the unique-cluster
+/// list's capacity) and the assignment's clusters per workgroup (`per_group`), whose dispatch
+/// it writes at [`ARGS_ASSIGNMENT`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct TileClusterParams {
+    pub frame: FrameParams,
+    pub per_group: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<TileClusterParams>() == 112);
+const _: () = assert!(core::mem::size_of::<TileClusterParams>() <= MAX_PUSH_CONSTANT_BYTES);
 
 /// Radix sort kernels (`radix_histogram`, `radix_upsweep`, `radix_spine`, `radix_downsweep`,
 /// `radix_sort_tile`).
@@ -383,7 +402,10 @@ pub struct BvhAssignParams {
     pub frame: FrameParams,
     /// Children per node of the light BVH (32 or 64).
     pub branching: u32,
-    pub _pad: [u32; 3],
+    /// Words of the staged light lists, shared out among the frame's clusters
+    /// (`clustered_bvh::stage_stride`; 0 without a stage).
+    pub stage_words: u32,
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() == 112);
 const _: () = assert!(core::mem::size_of::<BvhAssignParams>() <= MAX_PUSH_CONSTANT_BYTES);

@@ -126,6 +126,7 @@ mod sort_acceptance_tests;
 pub mod sort_inputs;
 #[cfg(test)]
 mod test_support;
+pub mod tile_clusters;
 #[cfg(feature = "compute")]
 pub mod tile_cull;
 #[cfg(feature = "compute")]

@@ -3,7 +3,7 @@
 //! ([`crate::forward_plus`]: node allocation, linked-list push) and the loop limits of every
 //! technique that loops over all lights (naive clustered, BVH walk, tiled).
 //!
-//! * [`AtomicAdd`], [`AtomicExchange`] — a storage-buffer word's atomics on the GPU (device
+//! * [`AtomicAdd`], [`AtomicExchange`], [`AtomicMax`] — a storage-buffer word's atomics on the GPU (device
 //!   scope, relaxed); a plain read-modify-write off the GPU, or `&AtomicU32` in the emulation.
 //! * [`subgroup_reserve`] — subgroup-aggregated slot reservation: one atomic per subgroup.
 //! * [`ListSink`] — where list building writes light indices (a storage buffer on the GPU, a
@@ -118,6 +118,28 @@ impl AtomicExchange for u32 {
 impl AtomicExchange for &std::sync::atomic::AtomicU32 {
     fn exchange(&mut self, v: u32) -> u32 {
         std::sync::atomic::AtomicU32::swap(self, v, std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+/// A word that can be raised atomically (`OpAtomicUMax`, device scope, relaxed, on the GPU;
+/// plain off the GPU).
+pub trait AtomicMax {
+    fn fetch_max(&mut self, v: u32) -> u32;
+}
+
+impl AtomicMax for u32 {
+    #[inline]
+    fn fetch_max(&mut self, v: u32) -> u32 {
+        #[cfg(target_arch = "spirv")]
+        unsafe {
+            spirv_std::arch::atomic_u_max::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(self, v)
+        }
+        #[cfg(not(target_arch = "spirv"))]
+        {
+            let old = *self;
+            *self = old.max(v);
+            old
+        }
     }
 }
 

@@ -25,6 +25,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),
+        unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
     }

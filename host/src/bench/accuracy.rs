@@ -168,6 +168,7 @@ fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Prec
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),
+        unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
     }

@@ -281,6 +281,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),
+        unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
     }

@@ -2,6 +2,16 @@
 //! in Karas' Vulkan design (virtual page table of unique clusters, Morton-sorted lights in a
 //! light BVH), one kernel per step:
 //! 1. **G-buffer** (raster, recorded by the frame loop) → depth | normal | albedo buffers.
+//!
+//! Steps 2–3 find the frame's unique clusters one of two ways ([`UniqueClusters`]):
+//! * **unique clusters** (the default, `--unique-clusters tiles`) — one dispatch, one workgroup
+//!   per screen tile (`clustered::tile_clusters`, `shaders::tile_clusters`): the tile's pixel
+//!   keys, a mask of its slices in workgroup memory, its clusters reserved in the list with one
+//!   atomic add, and a record per mask word for the shading's lookup. On the H200 (Sponza
+//!   1080p) it replaces the six dispatches below.
+//! * Karas' virtual page table (`--unique-clusters page-table`, and scenes with transparent
+//!   draws):
+//!
 //! 2. **keys** — cluster key per pixel, and its page's mark (`clustered::pixel_keys`): 32 px
 //!    tiles × exponential depth slices, `k = ⌊ln(−z/near) / ln(1 + 2·tanθ/S_y)⌋`.
 //! 3. **page table** — (pages marked with the keys) allocate in one workgroup (a scan of the
@@ -26,7 +36,9 @@
 //!    when a second pass copied them). The stage's words are shared out among the frame's
 //!    clusters (`clustered_bvh::stage_stride`, stored by the page table's scan: up to 1 024
 //!    lights each).
-//! 5. **shading** — per pixel: key → page → slot → cluster → list → lights.
+//! 5. **shading** — per pixel: key → page → slot → cluster → list → lights (tile path: key →
+//!    its tile's record → cluster; the kernel then hands the tile path's cluster count to the
+//!    host and zeroes its atomics for the next frame).
 //! 6. **transparency** (scenes with transparent draws, `transparent.rs`): inside steps 2 and 3 a
 //!    raster pre-pass of the transparent draws marks their fragments' pages, then slots, so
 //!    their clusters get lists; after step 5 the transparent pass and its resolve.
@@ -34,7 +46,8 @@
 //! Capacities that depend on the view (pages touched, light references) are GPU counters read
 //! back after the frame; if one exceeded its buffer, the buffer grows and the frame re-runs.
 //!
-//! Memory: 4 B per pixel (keys); 4 B per page of the key space ×2 (marks, page table); 8 B per
+//! Memory: 4 B per pixel (keys); tile path: 8 B per mask word per tile (147 KB at 1080p), unique
+//! clusters at most one per pixel or per grid cluster; page table: 4 B per page of the key space ×2 (marks, page table); 8 B per
 //! slot (512 slots per touched page) and 12 B per allocatable page (its key-space page, slot
 //! count and offset); 12 B per unique cluster (list, counts, offsets); 4 B per light reference;
 //! the BVH (`bvh.rs`); `clustered-bvh`'s staged lists, 256 B per cluster of the capacity for
@@ -54,6 +67,8 @@ use shaders::page_table::page_count;
 pub struct Clustered {
     bvh: Option<LightBvh>,
     grid: ClusterGrid,
+    /// How the unique clusters are found (`render --unique-clusters`).
+    unique: UniqueClusters,
     buffers: ClusterBuffers,
     /// The transparent pass, for scenes with transparent draws.
     transparency: Option<Transparency>,
@@ -83,8 +98,9 @@ impl Clustered {
         let grid = f.params.grid;
         let caps = Capacities::initial(&grid, f.params.num_lights);
         let transparency = Transparency::new(f, gpu, Some(TRANSPARENT_MARK_PAGES)).context("creating the transparent pass")?;
-        let buffers = ClusterBuffers::new(gpu, &grid, caps, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
-        Ok(Self { bvh, grid, buffers, transparency, last: (0, 0, 0) })
+        let unique = f.settings.unique_clusters;
+        let buffers = ClusterBuffers::new(gpu, &grid, caps, unique, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
+        Ok(Self { bvh, grid, unique, buffers, transparency, last: (0, 0, 0) })
     }
 }
 
@@ -142,10 +158,10 @@ impl Clustered {
     /// capacity was too small.
     fn grow_lists(&mut self, gpu: &Gpu) -> Result<Option<String>> {
         let c: Vec<u32> = self.buffers.counters.read(COUNTERS as usize)?;
-        self.last = (c[COUNTER_UNIQUE_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
+        self.last = (c[COUNTER_FRAME_CLUSTERS as usize], c[COUNTER_LIGHT_REFS as usize], c[COUNTER_PAGES as usize]);
         let (_, refs, pages) = self.last;
         let Some(caps) = self.buffers.caps.grown(pages, refs) else { return Ok(None) };
-        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps, self.transparency.is_some(), self.bvh.is_some())
+        self.buffers = ClusterBuffers::new(gpu, &self.grid, caps, self.unique, self.transparency.is_some(), self.bvh.is_some())
             .with_context(|| format!("growing the cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs))?;
         Ok(Some(format!("cluster buffers to {} pages and {} light references", caps.pages, caps.light_refs)))
     }
@@ -184,20 +200,62 @@ impl Capacities {
     }
 }
 
-/// Word offsets of the indirect dispatches in `ClusterBuffers::dispatch_args`.
-const ARGS_PAGES: u32 = 0;
-const ARGS_ASSIGNMENT: u32 = 3;
+/// How the clustered techniques find the frame's unique clusters (`render --unique-clusters`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum UniqueClusters {
+    /// One workgroup per screen tile builds a mask of its slices and reserves its clusters
+    /// (`shaders::tile_clusters`): one dispatch. The default; scenes with transparent draws and
+    /// grids of more than `shaders::tile_clusters::MAX_TILE_SLICES` slices take the page table.
+    #[default]
+    Tiles,
+    /// Karas' virtual page table (`shaders::page_table`): five dispatches.
+    PageTable,
+}
 
-struct ClusterBuffers {
-    pub caps: Capacities,
+impl UniqueClusters {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tiles => "tiles",
+            Self::PageTable => "page-table",
+        }
+    }
+
+    /// The path a frame of `grid` takes (`transparent`: the scene has transparent draws, whose
+    /// fragments only the page table serves).
+    pub fn for_frame(self, grid: &ClusterGrid, transparent: bool) -> Self {
+        match self {
+            Self::Tiles if transparent || !shaders::tile_clusters::serves(grid) => Self::PageTable,
+            u => u,
+        }
+    }
+}
+
+/// The buffers of the path that finds the unique clusters.
+enum UniqueBuffers {
+    /// The tiles' records (mask words and the list index of their lowest bit).
+    Tiles { records: Buffer },
+    PageTable(Box<PageTable>),
+}
+
+/// The virtual page table's buffers.
+struct PageTable {
     page_count: u32,
-    max_clusters: u32,
-    pub keys: Buffer,
     marks: Buffer,
     page_base: Buffer,
     page_of_alloc: Buffer,
     slots: Buffer,
     slot_rank: Buffer,
+    /// Set slots per allocated page, and their exclusive scan (`page_table` step 5).
+    page_counts: Buffer,
+    page_offsets: Buffer,
+}
+
+struct ClusterBuffers {
+    pub caps: Capacities,
+    max_clusters: u32,
+    path: UniqueBuffers,
+    pub keys: Buffer,
     pub unique: Buffer,
     pub counts: Buffer,
     pub offsets: Buffer,
@@ -211,21 +269,15 @@ struct ClusterBuffers {
     /// Workgroup counts written on the GPU from its counters (`VkDispatchIndirectCommand`s):
     /// [`ARGS_PAGES`] one per allocated page, [`ARGS_ASSIGNMENT`] for the unique clusters.
     dispatch_args: Buffer,
-    /// Set slots per allocated page, and their exclusive scan (`page_table` step 5).
-    page_counts: Buffer,
-    page_offsets: Buffer,
 }
 
 impl ClusterBuffers {
-    /// Buffers at `caps`; with `transparent`, transparent fragments add clusters of their own, so
-    /// the unique clusters are bounded by the slots, not by the pixels; `staged`: with the stage
-    /// of the BVH walks.
-    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, transparent: bool, staged: bool) -> VkResult<Self> {
+    /// Buffers at `caps` for `unique`'s path; with `transparent`, transparent fragments add
+    /// clusters of their own, so the unique clusters are bounded by the slots, not by the pixels;
+    /// `staged`: with the stage of the BVH walks.
+    pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, unique: UniqueClusters, transparent: bool, staged: bool) -> VkResult<Self> {
         let ctx = &gpu.ctx;
         let pixels = grid.width * grid.height;
-        let pages = page_count(grid);
-        let slots = caps.slots();
-        let max_clusters = if transparent { slots } else { pixels.min(slots) };
         let words = |name: &str, n: u32| {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::storage(ctx, name, 4 * n as u64)
@@ -234,37 +286,53 @@ impl ClusterBuffers {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::zeroed(ctx, name, 4 * n as u64)
         };
+        let (path, max_clusters) = match unique.for_frame(grid, transparent) {
+            UniqueClusters::Tiles => {
+                let grid_clusters = (grid.tiles_x * grid.tiles_y).saturating_mul(grid.num_slices);
+                (UniqueBuffers::Tiles { records: words("tile cluster records", shaders::tile_clusters::record_words(grid))? }, pixels.min(grid_clusters))
+            }
+            UniqueClusters::PageTable => {
+                let pages = page_count(grid);
+                let slots = caps.slots();
+                let t = PageTable {
+                    page_count: pages,
+                    marks: zeroed("page marks", pages)?,
+                    page_base: words("page table", pages)?,
+                    page_of_alloc: words("page of allocation", caps.pages)?,
+                    slots: zeroed("page slots", slots)?,
+                    slot_rank: words("slot ranks", slots)?,
+                    page_counts: words("page slot counts", caps.pages)?,
+                    page_offsets: words("page slot offsets", caps.pages)?,
+                };
+                (UniqueBuffers::PageTable(Box::new(t)), if transparent { slots } else { pixels.min(slots) })
+            }
+        };
         let stage_words = if staged { max_clusters.min(STAGED_CLUSTERS) * STAGED_LIGHTS } else { 0 };
         Ok(Self {
             caps,
-            page_count: pages,
             max_clusters,
+            path,
             staged: if staged { Some(words("staged light lists", stage_words)?) } else { None },
             stage_words,
             keys: words("cluster keys", pixels)?,
-            marks: zeroed("page marks", pages)?,
-            page_base: words("page table", pages)?,
-            page_of_alloc: words("page of allocation", caps.pages)?,
-            slots: zeroed("page slots", slots)?,
-            slot_rank: words("slot ranks", slots)?,
             unique: words("unique clusters", max_clusters)?,
             counts: words("light counts", max_clusters)?,
             offsets: words("light offsets", max_clusters)?,
             list: words("light lists", caps.light_refs)?,
-            counters: words("counters", COUNTERS)?,
-            dispatch_args: words("indirect dispatches", 6)?,
-            page_counts: words("page slot counts", caps.pages)?,
-            page_offsets: words("page slot offsets", caps.pages)?,
+            // Zero: the tile path's atomics start from them (and its shading zeroes them after).
+            counters: zeroed("counters", COUNTERS)?,
+            dispatch_args: zeroed("indirect dispatches", ARGS_WORDS)?,
         })
     }
 
     /// Bytes per buffer, for the stats file.
     pub fn sizes(&self) -> Vec<(String, u64)> {
-        let b = [
-            &self.keys, &self.marks, &self.page_base, &self.page_of_alloc, &self.slots, &self.slot_rank, &self.unique,
-            &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args, &self.page_counts, &self.page_offsets,
-        ];
-        b.into_iter().chain(self.staged.as_ref()).map(|b| (b.name.clone(), b.size)).collect()
+        let common = [&self.keys, &self.unique, &self.counts, &self.offsets, &self.list, &self.counters, &self.dispatch_args];
+        let path: Vec<&Buffer> = match &self.path {
+            UniqueBuffers::Tiles { records } => vec![records],
+            UniqueBuffers::PageTable(t) => vec![&t.marks, &t.page_base, &t.page_of_alloc, &t.slots, &t.slot_rank, &t.page_counts, &t.page_offsets],
+        };
+        common.into_iter().chain(path).chain(self.staged.as_ref()).map(|b| (b.name.clone(), b.size)).collect()
     }
 
     /// Records steps 2–5 (keys … shading) of the clustered chain. With `bvh`, the assignment
@@ -281,48 +349,22 @@ impl ClusterBuffers {
     ) -> VkResult<()> {
         let (g, bounds, lights, materials, frame) = (f.targets, f.bounds, f.lights, f.materials, f.frame);
         let k = &gpu.kernels;
-        let n = p.count;
-        let with = |count: u32| FrameParams { count, ..*p };
-        // Marks and slots are zero at allocation and cleared by their last readers
-        // (`allocate_pages`, `compact_page_slots`): no fill at their capacity.
-        // The counters are stored whole by the passes that count (the light references start
-        // at 0 in `allocate_pages`): no fill.
-        rec.pass("keys", |rec| {
-            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &self.marks], p, n)?;
-            match transparency {
-                Some(t) => {
-                    let m = Marks { stage: TRANSPARENT_MARK_PAGES, marks: &self.marks, page_table: Some((&self.page_base, &self.slots)) };
-                    t.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::CopySource }, &m)
-                }
-                None => Ok(()),
-            }
-        })?;
         // The assignment's workgroups (for the frame's unique clusters, not for the buffers'
-        // capacity): sized by the page table's scan.
-        let c = with(self.max_clusters);
-        let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, _pad: [0; 3] }));
+        // capacity): sized by the pass that finds them.
+        let c = FrameParams { count: self.max_clusters, ..*p };
+        let walk = bvh.zip(self.staged.as_ref()).map(|(b, st)| (b, st, BvhAssignParams { frame: c, branching: b.branching, stage_words: self.stage_words, _pad: [0; 2] }));
         let per_group = match walk {
             None => shaders::kernels::CLUSTER_LIGHT_COUNTS.invocations(),
             Some(_) => rec.subgroup_items_per_group(k.assign_lights_bvh.get(c.effects)?),
         };
-        rec.pass("page table", |rec| {
-            // One workgroup allocates the marked pages (and sizes the per-page dispatches).
-            let a = PageTableParams { pages: self.page_count, capacity: self.caps.pages, per_group: 1, args_offset: ARGS_PAGES, stage_words: 0, _pad: [0; 3] };
-            rec.dispatch(&k.allocate_pages, &[&self.marks, &self.page_base, &self.page_of_alloc, &self.counters, &self.dispatch_args], &a, [1, 1, 1])?;
-            rec.dispatch_linear(&k.store_slots, &[&self.keys, &self.page_base, &self.slots], p, n)?;
-            if let Some(t) = transparency {
-                let m = Marks { stage: TRANSPARENT_STORE_SLOTS, marks: &self.marks, page_table: Some((&self.page_base, &self.slots)) };
-                t.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, &m)?;
-            }
-            // The allocated pages' slots: counted per page, the counts scanned in one
-            // workgroup, the slots ranked and compacted per page.
-            let args = &self.dispatch_args;
-            rec.dispatch_indirect(&k.count_page_slots, &[&self.slots, &self.page_counts], &(), args, ARGS_PAGES)?;
-            let s = PageTableParams { pages: self.page_count, capacity: self.caps.pages, per_group, args_offset: ARGS_ASSIGNMENT, stage_words: self.stage_words, _pad: [0; 3] };
-            rec.dispatch(&k.scan_page_counts, &[&self.page_counts, &self.page_offsets, &self.counters, args], &s, [1, 1, 1])?;
-            let compact = [&self.slots, &self.page_offsets, &self.page_of_alloc, &self.slot_rank, &self.unique];
-            rec.dispatch_indirect(&k.compact_page_slots, &compact, &(), args, ARGS_PAGES)
-        })?;
+        match &self.path {
+            UniqueBuffers::Tiles { records } => rec.pass("unique clusters", |rec| {
+                let t = TileClusterParams { frame: c, per_group, _pad: [0; 3] };
+                let tiles = [p.grid.tiles_x, p.grid.tiles_y, 1];
+                rec.dispatch(&k.tile_clusters, &[&g.depth_buf, bounds, &self.keys, records, &self.unique, &self.counters, &self.dispatch_args], &t, tiles)
+            })?,
+            UniqueBuffers::PageTable(t) => self.record_page_table(gpu, rec, p, f, t, per_group, transparency)?,
+        }
         rec.pass("assignment", |rec| {
             let args = &self.dispatch_args;
             match walk {
@@ -347,26 +389,69 @@ impl ClusterBuffers {
                 ),
             }
         })?;
-        rec.pass("shading", |rec| {
-            rec.dispatch_blocks(
-                super::shading_pipeline(&k.shade_clustered, p)?,
-                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.keys, &self.page_base, &self.slot_rank, &self.counts, &self.offsets, &self.list, lights, materials, frame, bounds],
-                p,
-                p.grid.width,
-                p.grid.height,
-            )
-        })?;
-        let Some(t) = transparency else { return Ok(()) };
+        let (w, h) = (p.grid.width, p.grid.height);
+        let (gbuffer, lists) = ([&g.depth_buf, &g.normal_buf, &g.albedo_buf], [&self.counts, &self.offsets, &self.list, lights, materials, frame, bounds]);
+        let t = match &self.path {
+            UniqueBuffers::Tiles { records } => {
+                // Also hands the cluster count over and zeroes the tile path's atomics.
+                let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, records]).chain(lists).chain([&self.counters, &self.dispatch_args]).collect();
+                return rec.pass("shading", |rec| rec.dispatch_blocks(super::shading_pipeline(&k.shade_clustered_tiles, p)?, &buffers, p, w, h));
+            }
+            UniqueBuffers::PageTable(t) => t,
+        };
+        let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, &t.page_base, &t.slot_rank]).chain(lists).collect();
+        rec.pass("shading", |rec| rec.dispatch_blocks(super::shading_pipeline(&k.shade_clustered, p)?, &buffers, p, w, h))?;
+        let Some(tr) = transparency else { return Ok(()) };
         let c = ClusterInputs {
-            page_base: &self.page_base,
-            slot_rank: &self.slot_rank,
+            page_base: &t.page_base,
+            slot_rank: &t.slot_rank,
             unique: &self.unique,
             counters: &self.counters,
             counts: &self.counts,
             offsets: &self.offsets,
             list: &self.list,
         };
-        t.record_shade(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, Some(&c))
+        tr.record_shade(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, Some(&c))
+    }
+
+    /// Steps 2–3 through the virtual page table, with the transparent draws' marks.
+    #[allow(clippy::too_many_arguments)]
+    fn record_page_table(&self, gpu: &Gpu, rec: &mut Recorder<'_>, p: &FrameParams, f: &FrameInputs<'_>, t: &PageTable, per_group: u32, transparency: Option<&Transparency>) -> VkResult<()> {
+        let (g, bounds) = (f.targets, f.bounds);
+        let k = &gpu.kernels;
+        let n = p.count;
+        // Marks and slots are zero at allocation and cleared by their last readers
+        // (`allocate_pages`, `compact_page_slots`): no fill at their capacity.
+        // The counters are stored whole by the passes that count (the light references start
+        // at 0 in `allocate_pages`): no fill.
+        rec.pass("keys", |rec| {
+            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &t.marks], p, n)?;
+            match transparency {
+                Some(tr) => {
+                    let m = Marks { stage: TRANSPARENT_MARK_PAGES, marks: &t.marks, page_table: Some((&t.page_base, &t.slots)) };
+                    tr.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::CopySource }, &m)
+                }
+                None => Ok(()),
+            }
+        })?;
+        rec.pass("page table", |rec| {
+            // One workgroup allocates the marked pages (and sizes the per-page dispatches).
+            let a = PageTableParams { pages: t.page_count, capacity: self.caps.pages, per_group: 1, args_offset: ARGS_PAGES, _pad: [0; 4] };
+            rec.dispatch(&k.allocate_pages, &[&t.marks, &t.page_base, &t.page_of_alloc, &self.counters, &self.dispatch_args], &a, [1, 1, 1])?;
+            rec.dispatch_linear(&k.store_slots, &[&self.keys, &t.page_base, &t.slots], p, n)?;
+            if let Some(tr) = transparency {
+                let m = Marks { stage: TRANSPARENT_STORE_SLOTS, marks: &t.marks, page_table: Some((&t.page_base, &t.slots)) };
+                tr.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, &m)?;
+            }
+            // The allocated pages' slots: counted per page, the counts scanned in one
+            // workgroup, the slots ranked and compacted per page.
+            let args = &self.dispatch_args;
+            rec.dispatch_indirect(&k.count_page_slots, &[&t.slots, &t.page_counts], &(), args, ARGS_PAGES)?;
+            let s = PageTableParams { pages: t.page_count, capacity: self.caps.pages, per_group, args_offset: ARGS_ASSIGNMENT, _pad: [0; 4] };
+            rec.dispatch(&k.scan_page_counts, &[&t.page_counts, &t.page_offsets, &self.counters, args], &s, [1, 1, 1])?;
+            let compact = [&t.slots, &t.page_offsets, &t.page_of_alloc, &t.slot_rank, &self.unique];
+            rec.dispatch_indirect(&k.compact_page_slots, &compact, &(), args, ARGS_PAGES)
+        })
     }
 
     /// Reads the cluster data back (tests, statistics).

@@ -169,6 +169,8 @@ pub struct Settings {
     pub sort: sort::SortKind,
     /// Layout of the per-tile light lists (`forward-plus`).
     pub fp_lists: forward_plus::TileLists,
+    /// How `clustered-naive` and `clustered-bvh` find the frame's unique clusters.
+    pub unique_clusters: clustered::UniqueClusters,
     /// How transparent fragments are resolved (`--oit`; scenes with transparent materials).
     pub oit: transparent::OitVariant,
     /// Also time every dispatch, fill and copy inside each pass (`--dispatch-times`).

@@ -1,7 +1,8 @@
 //! CPU references for a clustered frame, computed from its read-back data:
 //! * keys recomputed from the G-buffer depth must equal the GPU's bit for bit;
-//! * the unique-cluster list must equal the sorted distinct keys (with transparent draws: be
-//!   sorted, distinct and hold them, the transparent fragments' clusters beside them);
+//! * the unique-cluster list must hold the distinct keys, each once, in any order (the page
+//!   table sorts them, the tile path groups them by tile; with transparent draws: hold them, the
+//!   transparent fragments' clusters beside them);
 //! * every pixel's cluster list must contain every light whose range touches the pixel's
 //!   view-space position (`lighting::light_touches`) — conservative culling, no dropped light;
 //! * every cluster's list must equal, as a set, the CPU's naive search for lights meeting its box
@@ -27,7 +28,8 @@ pub struct ListStats {
 
 /// Index of each valid pixel's cluster in `rb.unique` (None for background pixels).
 pub fn pixel_clusters(rb: &Readback) -> Vec<Option<usize>> {
-    rb.keys.iter().map(|&k| if k == INVALID_KEY { None } else { rb.unique.binary_search(&k).ok() }).collect()
+    let index: std::collections::HashMap<u32, usize> = rb.unique.iter().enumerate().map(|(c, &k)| (k, c)).collect();
+    rb.keys.iter().map(|&k| if k == INVALID_KEY { None } else { index.get(&k).copied() }).collect()
 }
 
 pub fn list_stats(rb: &Readback) -> ListStats {
@@ -79,10 +81,12 @@ pub fn check(rb: &Readback) -> Result<()> {
     ensure!(bad_keys.is_empty(), "GPU cluster keys differ from the CPU's at pixels {bad_keys:?}");
     let expected = unique_keys_reference(&cpu_keys);
     // Transparent fragments add clusters of their own: the opaque pixels' are then a subset.
+    let mut sorted = rb.unique.clone();
+    sorted.sort_unstable();
     let unique_ok = if rb.transparent {
-        rb.unique.windows(2).all(|w| w[0] < w[1]) && expected.iter().all(|k| rb.unique.binary_search(k).is_ok())
+        sorted.windows(2).all(|w| w[0] < w[1]) && expected.iter().all(|k| sorted.binary_search(k).is_ok())
     } else {
-        expected == rb.unique
+        expected == sorted
     };
     ensure!(
         unique_ok,

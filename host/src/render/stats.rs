@@ -24,6 +24,10 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "technique": format!("{:?}", s.technique),
         // The per-tile list layout (`--fp-lists`) where the technique has one.
         "fp_lists": (s.technique == super::Technique::ForwardPlus).then(|| s.fp_lists.name()),
+        // How the clustered techniques found the unique clusters (`--unique-clusters`, or the
+        // page table where the scene has transparent draws).
+        "unique_clusters": matches!(s.technique, super::Technique::ClusteredNaive | super::Technique::ClusteredBvh)
+            .then(|| s.unique_clusters.for_frame(&frame.grid, frame.transparency.is_some()).name()),
         // The transparent pass, where the scene has transparent draws: the resolve (`--oit`),
         // fragments (the node counter), the most layers of a pixel, node-buffer bytes.
         "oit": frame.transparency.map(|_| s.oit.name()),

@@ -129,6 +129,9 @@ impl SharedU32 for CpuShared<'_> {
         self.words[i as usize].set(old.wrapping_add(v));
         old
     }
+    fn atomic_or(&mut self, i: u32, v: u32) {
+        self.words[i as usize].set(self.words[i as usize].get() | v);
+    }
 }
 
 /// Shape of an emulated dispatch.

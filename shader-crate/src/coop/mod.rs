@@ -70,6 +70,8 @@ pub trait SharedU32 {
     fn store(&mut self, i: u32, v: u32);
     /// Adds `v` to word `i` atomically (workgroup scope, relaxed) and returns the old value.
     fn atomic_add(&mut self, i: u32, v: u32) -> u32;
+    /// Sets the bits of `v` in word `i` atomically (workgroup scope, relaxed).
+    fn atomic_or(&mut self, i: u32, v: u32);
 }
 
 impl<const N: usize> SharedU32 for [u32; N] {
@@ -96,6 +98,18 @@ impl<const N: usize> SharedU32 for [u32; N] {
             let old = self[i as usize];
             self[i as usize] = old.wrapping_add(v);
             old
+        }
+    }
+    /// `OpAtomicOr` on the GPU; a plain read-modify-write off it.
+    #[inline]
+    fn atomic_or(&mut self, i: u32, v: u32) {
+        #[cfg(target_arch = "spirv")]
+        unsafe {
+            spirv_std::arch::atomic_or::<u32, { spirv_std::memory::Scope::Workgroup as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(&mut self[i as usize], v);
+        }
+        #[cfg(not(target_arch = "spirv"))]
+        {
+            self[i as usize] |= v;
         }
     }
 }
