@@ -428,19 +428,27 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
-        let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
-        if i == shading::NO_PIXEL {
-            return;
-        }
-        let key = keys[i as usize];
-        if key == INVALID_KEY {
-            frame[i as usize] = BACKGROUND_RGBA8;
-            return;
-        }
+        let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
         let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
+}
+
+/// The pixel (and its key) a cluster-list shading invocation shades, or `None` past the frame
+/// and for background, whose colour it stores.
+#[inline]
+fn keyed_pixel(p: &FrameParams, wg: UVec3, local: u32, keys: &[u32], frame: &mut [u32]) -> Option<(u32, u32)> {
+    let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
+    if i == shading::NO_PIXEL {
+        return None;
+    }
+    let key = keys[i as usize];
+    if key == INVALID_KEY {
+        frame[i as usize] = BACKGROUND_RGBA8;
+        return None;
+    }
+    Some((i, key))
 }
 
 specular_entries! {
@@ -473,15 +481,7 @@ specular_entries! {
             tile_clusters::hand_over_counters(counters, args);
         }
         let p = &crate::light_types::specialise(p, light_types);
-        let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
-        if i == shading::NO_PIXEL {
-            return;
-        }
-        let key = keys[i as usize];
-        if key == INVALID_KEY {
-            frame[i as usize] = BACKGROUND_RGBA8;
-            return;
-        }
+        let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = tile_clusters::cluster_of_key(&p.grid, records, key) as usize;
         let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
