@@ -67,7 +67,8 @@ pub fn pixel_keys(
 /// keys, its clusters (a mask of its slices) reserved in the unique-cluster list, their keys
 /// there, the tile's records for the shading's lookup, and the assignment's dispatch raised to
 /// cover them (one atomic add and one atomic maximum per tile). Workgroup (0, 0) zeroes the
-/// light-reference counter and the page count.
+/// light-reference counter (the page count stays at the zero the buffer starts with: this path
+/// allocates no pages).
 #[spirv(compute(threads(256)))] // tile_clusters::TILE_WORKGROUP
 pub fn tile_clusters(
     #[spirv(workgroup_id)] wg: UVec3,
@@ -131,7 +132,6 @@ pub fn tile_clusters(
     }
     if i == 0 && j == 0 && local_index == 0 {
         counters[COUNTER_LIGHT_REFS as usize] = 0;
-        counters[COUNTER_PAGES as usize] = 0;
         // Rows and depth of the dispatch: at least one each (more rows only past 65 535 groups).
         args[a + 1].fetch_max(1);
         args[a + 2].fetch_max(1);
