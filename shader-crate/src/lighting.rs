@@ -76,15 +76,16 @@
 //! Every factor is bounded (`falloff ≤ 1`, `n·l ≤ 1 + 3u`, the lobe `≤ (2228/8π)·(1+3u)^2220
 //! < 89`), so the result is finite whenever the light's `colour·intensity` and the albedo are.
 //!
-//! # HDR overflow: one clamp, in [`shade`]
+//! # HDR overflow: bounded by the host contract, no clamp
 //!
-//! Each light's radiance is clamped per channel to [`MAX_LIGHT_RADIANCE`] `= 2^90`. With
-//! `colour·intensity ≤` [`MAX_EMISSION`] `= 2^120` (host contract) nothing inside [`shade`]
-//! overflows (`≤ 89.1·2^120 < 2^127`), and a sum of fewer than `2^32` clamped contributions stays
-//! `< 2^122`: no technique's per-pixel sum can reach `+∞` whatever its order or list, since
-//! every one adds up [`shade`]'s results (a GPU may assume no `∞`, so none must arise). The clamp
-//! never changes an image: `2^90` is far past the tonemapper's saturation (`exposure·x ≥ 8` for
-//! any exposure `≥ 2^-87`), so a clamped channel is white as the exact sum would be.
+//! With `colour·intensity ≤` [`MAX_EMISSION`] `= 2^83` (host contract) one light's radiance is
+//! at most `89.1·2^83 < 2^90 =` [`MAX_LIGHT_RADIANCE`] per channel (`falloff ≤ 1`, `n·l ≤ 1`,
+//! albedo `≤ 1`, the lobe `< 89`), so nothing inside [`shade`] overflows and a sum of fewer than
+//! `2^32` contributions stays `< 2^122`: no technique's per-pixel sum can reach `+∞` whatever its
+//! order or list, since every one adds up [`shade`]'s results (a GPU may assume no `∞`, so none
+//! must arise). The bound needs no per-light clamp in the light loop. `2^90` is far past the
+//! tonemapper's saturation (`exposure·x ≥ 8` for any exposure `≥ 2^-87`), and `2^83 ≈ 10^25`
+//! is far past any physical emitter in view-space units.
 //!
 //! # Tonemap and encoding
 //!
@@ -114,10 +115,11 @@ const fn pow2(e: i32) -> f32 {
 }
 
 /// Largest `colour·intensity` (per channel) a light may have: [`shade`] stays finite below it
-/// (module docs, "HDR overflow"). `2^120 ≈ 1.3·10^36`.
-pub const MAX_EMISSION: f32 = pow2(120);
+/// (module docs, "HDR overflow"). `2^83 ≈ 9.7·10^24`.
+pub const MAX_EMISSION: f32 = pow2(83);
 
-/// Largest radiance one light adds to a channel ([`shade`] clamps to it): `2^90 ≈ 1.2·10^27`, so
+/// Bound on the radiance one light adds to a channel (module docs, "HDR overflow": [`shade`] stays
+/// below it for lights within [`MAX_EMISSION`]): `2^90 ≈ 1.2·10^27`, so
 /// that fewer than `2^32` lights cannot sum past `f32::MAX` (module docs, "HDR overflow").
 pub const MAX_LIGHT_RADIANCE: f32 = pow2(90);
 
@@ -258,7 +260,8 @@ pub fn shininess(roughness: f32) -> f32 {
 /// normalised Blinn-Phong (module docs) times the light's colour, intensity and [`falloff`].
 /// The specular lobe only with `effects & EFFECT_SPECULAR`. Exactly 0 when `!light_touches`;
 /// finite for every finite input, including `p = 0`, `n = 0`, `p = c`, `r = 0`, `r = 1e30`;
-/// each channel at most [`MAX_LIGHT_RADIANCE`] (module docs, "HDR overflow").
+/// each channel below [`MAX_LIGHT_RADIANCE`] for lights within [`MAX_EMISSION`] (module docs,
+/// "HDR overflow").
 #[inline]
 pub fn shade(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
     shade_variant::<true>(p, n, albedo, specular, roughness, light, effects)
@@ -340,7 +343,7 @@ fn brdf_radiance<const SPECULAR: bool>(p: Vec3, n: Vec3, l: Vec3, ndotl: f32, al
         }
     }
     let e = ndotl * att * intensity;
-    ((albedo * INV_PI + Vec3::splat(spec)) * colour * e).min(Vec3::splat(MAX_LIGHT_RADIANCE))
+    (albedo * INV_PI + Vec3::splat(spec)) * colour * e
 }
 
 /// ACES fitted curve (Narkowicz 2015) of one channel, `x` clamped to [0, 8] (NaN → 0), result
