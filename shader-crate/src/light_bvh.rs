@@ -449,17 +449,13 @@ pub fn walk_subgroup<C: Coop>(
             let span = if second == NO_LEAF { b } else { 2 * b };
             let mut v0 = 0;
             while v0 < span {
-                // Every lane loads its slot of four chunks before any is tested, so the four
-                // loads are in flight together (a walk is a chain of dependent steps).
+                // Every lane loads its slot of two chunks before either is tested, so both loads
+                // are in flight together (a walk is a chain of dependent steps).
                 let k0 = leaves.load(spheres, order, v0 + lane);
                 let k1 = leaves.load(spheres, order, v0 + w + lane);
-                let k2 = leaves.load(spheres, order, v0 + 2 * w + lane);
-                let k3 = leaves.load(spheres, order, v0 + 3 * w + lane);
                 found = k0.vote(c, v0 < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
                 found = k1.vote(c, v0 + w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
-                found = k2.vote(c, v0 + 2 * w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
-                found = k3.vote(c, v0 + 3 * w < span, found, cluster, effects, lights, n, c0, r0, &mut emit);
-                v0 += 4 * w;
+                v0 += 2 * w;
             }
         } else {
             let below = (level - 1) as usize;
