@@ -430,7 +430,7 @@ specular_entries! {
         let p = &crate::light_types::specialise(p, light_types);
         let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
-        let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        let cluster_list = shading::list_range(list, offsets[cluster], counts[cluster]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }
@@ -483,7 +483,7 @@ specular_entries! {
         let p = &crate::light_types::specialise(p, light_types);
         let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = tile_clusters::cluster_of_key(&p.grid, records, key) as usize;
-        let cluster_list = shading::index_range(offsets[cluster], counts[cluster], |t| list[t as usize]);
+        let cluster_list = shading::list_range(list, offsets[cluster], counts[cluster]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
 }

@@ -135,6 +135,7 @@ pub mod tessellation;
 pub mod tiled;
 #[cfg(feature = "compute")]
 pub mod transparency;
+pub mod unchecked;
 
 #[cfg(not(target_arch = "spirv"))]
 pub mod kernels;

@@ -202,6 +202,17 @@ pub fn index_range<F: Fn(u32) -> u32>(first: u32, count: u32, at: F) -> IndexRan
     IndexRange { first, end: first + count, at }
 }
 
+/// Entries `first..first + count` of the list buffer `list`, read without a bounds check on the
+/// GPU ([`crate::unchecked`]): empty unless the range lies inside the buffer (a list the
+/// assignment could not place this frame, whose buffer the host grows before it renders the
+/// frame again), so every entry read is in bounds.
+#[inline]
+pub fn list_range(list: &[u32], first: u32, count: u32) -> IndexRange<impl Fn(u32) -> u32 + '_> {
+    let len = list.len() as u32;
+    let count = if count <= len && first <= len - count { count } else { 0 };
+    index_range(first, count, move |t| crate::unchecked::at(list, t))
+}
+
 impl<F: Fn(u32) -> u32> LightList for IndexRange<F> {
     #[inline]
     fn start(&self) -> u32 {
@@ -361,14 +372,19 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, nu
     if end <= first {
         return 0;
     }
+    // A light index past the buffer (none is: lists hold indices of this frame's lights, and an
+    // empty buffer has no list entries) reads the last light instead of leaving the buffer: one
+    // minimum instead of a bounds check (`crate::unchecked`).
+    let n = lights.len() as u32;
+    let last = if n > 0 { n - 1 } else { 0 };
     let mut t = first;
     while t < end {
         let l = list.at(t);
-        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &lights[l as usize]);
+        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, crate::unchecked::get(lights, l.min(last)));
         t += 1;
         if t < end {
             let l = list.at(t);
-            *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &lights[l as usize]);
+            *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, crate::unchecked::get(lights, l.min(last)));
             t += 1;
         }
     }

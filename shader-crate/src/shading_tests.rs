@@ -145,6 +145,23 @@ fn cursors_walk_exactly_their_lists() {
     }
 }
 
+/// A list buffer's range reads its entries where it lies inside the buffer and is empty
+/// wherever it does not (a list the assignment could not place: nothing past the buffer is read,
+/// which the unchecked GPU read relies on; `crate::unchecked`).
+#[test]
+fn list_ranges_are_empty_unless_inside_their_buffer() {
+    let buffer = [5u32, 6, 7, 8];
+    let r = list_range(&buffer, 1, 3);
+    assert_eq!(walk(&r), vec![6, 7, 8]);
+    assert_eq!(walk(&list_range(&buffer, 0, 4)), buffer.to_vec());
+    assert_eq!(walk(&list_range(&buffer, 4, 0)), Vec::<u32>::new());
+    for (first, count) in [(2, 3), (0, 5), (5, 0), (4, 1), (u32::MAX, 2), (1, u32::MAX), (u32::MAX, u32::MAX)] {
+        let r = list_range(&buffer, first, count);
+        assert_eq!(r.end(), Some(r.start()), "{first}+{count} lies outside a buffer of 4");
+        assert_eq!(walk(&r), Vec::<u32>::new());
+    }
+}
+
 /// A list shaded in two parts into one sum equals the list shaded at once (tiled rounds).
 #[test]
 fn a_list_in_parts_sums_like_one_list() {
