@@ -282,7 +282,8 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
         .vulkan_memory_model(true)
         .vulkan_memory_model_device_scope(true)
-        .host_query_reset(true);
+        .host_query_reset(true)
+        .timeline_semaphore(true);
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
         .subgroup_size_control(true)
         .compute_full_subgroups(info.full_subgroups)

@@ -205,7 +205,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// A recorder over `cmd` that goes on timing into `profiler` where an earlier command buffer
-    /// of the same queue left it (no reset: both submissions' passes are one frame's).
+    /// of the same queue left it (no reset: both command buffers' passes are one frame's).
     pub(crate) fn continuing(ctx: &'a Context, cmd: vk::CommandBuffer, profiler: Option<&'a mut Profiler>) -> Self {
         Self { ctx, cmd, profiler, bound_graphics: vk::Pipeline::null() }
     }
