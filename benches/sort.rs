@@ -15,7 +15,7 @@
 //! CPU sort. Criterion reports each as keys/s (`thrpt`).
 //!
 //! First a summary table of every GPU sort on uniform keys: median GPU ms of 3 batches, keys/s and
-//! wall-clock ms per sort, and beside the radix rows CUB's key–value sort (CuPy
+//! wall-clock ms per sort, and beside the radix and `auto` rows CUB's key–value sort (CuPy
 //! `argsort` + gather, `benches/cub_sort.py`) where the device is an NVIDIA GPU with CuPy, with
 //! the ratio to CUB.
 //!
@@ -25,7 +25,9 @@
 //! `MANYLIGHTS_SORT_SIZES` (default 1k,64k,1M,4M,16M; sizes whose buffers exceed the device's
 //! `maxStorageBufferRange` are skipped with a note); emulated sizes `MANYLIGHTS_SORT_CPU_SIZES`
 //! (default 1k,64k,1M; a few µs per key) at subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default
-//! 8). lavapipe's timestamps do not bracket its work: quote GPU numbers from a real GPU only.
+//! 8); `MANYLIGHTS_SORT_KEY_BITS` (default 30: every GPU sort orders the keys' low bits only,
+//! 8 per radix pass — 8, 16, 24 give one to three passes). lavapipe's timestamps do not bracket
+//! its work: quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use host::gpu::Gpu;
 use host::render::bitonic::BitonicSort;
@@ -97,7 +99,8 @@ fn gpu_sizes(gpu: &Gpu) -> Vec<usize> {
 }
 
 /// The sorts timed on the GPU: the device's radix variant, reduce-then-scan too where that is the
-/// chained scan, and the bitonic sort (with each keep of `MANYLIGHTS_BITONIC_KEEPS` too).
+/// chained scan, the bitonic sort (with each keep of `MANYLIGHTS_BITONIC_KEEPS` too) and the
+/// light pipeline's default, which picks one of them by size (`SortKind::Auto`).
 fn gpu_sorters(gpu: &Gpu, n: u32) -> Vec<(String, LightSorter)> {
     let radix = RadixSort::new(gpu, n).expect("radix sort buffers");
     let name = |c: CrossTile| format!("gpu radix {} (timestamps)", if c == CrossTile::Chained { "chained" } else { "reduce-then-scan" });
@@ -109,11 +112,20 @@ fn gpu_sorters(gpu: &Gpu, n: u32) -> Vec<(String, LightSorter)> {
         v.push((name(CrossTile::ReduceThenScan), LightSorter::Radix(Box::new(other))));
     }
     v.push(("gpu bitonic (timestamps)".into(), LightSorter::new(gpu, SortKind::Bitonic, n).expect("bitonic sort buffers")));
+    v.push(("gpu auto (timestamps)".into(), LightSorter::new(gpu, SortKind::Auto, n).expect("light sort buffers")));
     for keep in env_sizes("MANYLIGHTS_BITONIC_KEEPS", &[]) {
         let sort = BitonicSort::with_keep(gpu, n, keep as u32).expect("bitonic sort buffers");
         v.push((format!("gpu bitonic keep {keep} (timestamps)"), LightSorter::Bitonic(Box::new(sort))));
     }
     v
+}
+
+/// Bits of a 30-bit Morton key (3 × `MORTON30_BITS`).
+const KEY_BITS: u32 = 3 * MORTON30_BITS;
+
+/// Bits of the keys the GPU sorts (`MANYLIGHTS_SORT_KEY_BITS`, default [`KEY_BITS`]).
+fn key_bits() -> u32 {
+    std::env::var("MANYLIGHTS_SORT_KEY_BITS").ok().and_then(|b| b.parse().ok()).unwrap_or(KEY_BITS)
 }
 
 /// Sorts timed back to back in one submission by [`Inputs::time`].
@@ -153,7 +165,7 @@ impl Inputs {
             for _ in 0..BATCH {
                 rec.copy(&self.src_keys, &self.keys, bytes)?;
                 rec.copy(&self.src_values, &self.values, bytes)?;
-                rec.pass("sort", |rec| sorter.record(gpu, rec, &self.keys, &self.values, self.n, 30))?;
+                rec.pass("sort", |rec| sorter.record(gpu, rec, &self.keys, &self.values, self.n, key_bits()))?;
             }
             Ok(())
         })
@@ -228,12 +240,12 @@ fn median(xs: Vec<f64>) -> f64 {
 
 /// The summary (see the module doc), printed before the criterion groups: every GPU sort on
 /// uniform keys, GPU medians of 3 batches of [`BATCH`] sorts and wall-clock per sort, CUB beside
-/// the radix rows.
+/// the radix and `auto` rows.
 fn radix_summary(_: &mut Criterion) {
     let gpu = open_gpu();
     let sizes = gpu_sizes(&gpu);
     let cub = cub_ms(&gpu, &sizes);
-    println!("\nGPU sorts, uniform 30-bit keys, {}:", gpu.ctx.info.line());
+    println!("\nGPU sorts, uniform 30-bit keys sorted by their low {} bits, {}:", key_bits(), gpu.ctx.info.line());
     if gpu.ctx.info.is_llvmpipe() {
         println!("(lavapipe: its timestamps do not bracket its work, so GPU ms and keys/s are not GPU times; wall ms compare the sorts roughly)");
     }
@@ -249,7 +261,7 @@ fn radix_summary(_: &mut Criterion) {
             let gpu_ms = median(runs.iter().flat_map(|r| r.0.iter().copied()).collect());
             let wall_ms = median(runs.iter().map(|r| r.1).collect());
             let (cub_col, ratio) = match cub_n {
-                Some(c) if matches!(sorter, LightSorter::Radix(_)) => (format!("{c:.3}"), format!("{:.2}×", gpu_ms / c)),
+                Some(c) if !matches!(sorter, LightSorter::Bitonic(_)) => (format!("{c:.3}"), format!("{:.2}×", gpu_ms / c)),
                 _ => ("—".into(), "—".into()),
             };
             let name = name.trim_start_matches("gpu ").trim_end_matches(" (timestamps)");

@@ -144,6 +144,37 @@ fn render_times_each_dispatch_on_request() {
     }
 }
 
+/// `--sort` reaches the light sort's kernels (`--dispatch-times` names them): `auto`, the
+/// default, runs the bitonic sort up to 32 768 lights (one block sort up to 1 024, then merge
+/// levels) and the radix sort above; `radix` and `bitonic` run theirs at any count.
+#[test]
+fn sort_flag_picks_the_light_sort_kernels() {
+    let dir = TempDir::new("cli-sort");
+    let (png, json) = (dir.join("city.png"), dir.join("city.json"));
+    let kernels = |lights: &str, extra: &[&str]| -> Vec<String> {
+        let mut args = vec![
+            "render", "--scene", "city", "--lights", lights, "--width", "64", "--height", "36", "--frames", "1",
+            "--technique", "clustered-bvh", "--dispatch-times", "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let (ok, _, err) = manylights(&args);
+        assert!(ok, "render failed:\n{err}");
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        stats["gpu_ms"]["passes"].as_object().unwrap().keys().filter_map(|k| k.strip_prefix("light sort · ").map(str::to_owned)).collect()
+    };
+    for (lights, flags, runs, absent) in [
+        ("1000", &[][..], "entries::bitonic_block_sort", "entries::radix_"),
+        ("3000", &[], "entries::bitonic_merge", "entries::radix_"),
+        ("40000", &[], "entries::radix_histogram", "entries::bitonic_"),
+        ("1000", &["--sort", "radix"], "entries::radix_sort_tile", "entries::bitonic_"),
+        ("3000", &["--sort", "bitonic"], "entries::bitonic_merge", "entries::radix_"),
+    ] {
+        let got = kernels(lights, flags);
+        assert!(got.iter().any(|k| k.starts_with(runs)), "{lights} lights {flags:?}: {runs} runs: {got:?}");
+        assert!(!got.iter().any(|k| k.starts_with(absent)), "{lights} lights {flags:?}: no {absent}: {got:?}");
+    }
+}
+
 /// `--kernel-stats` lists what the driver compiled each kernel that ran to, one line per kernel
 /// executable, or says in one line that the device cannot tell; either way the render succeeds
 /// without a validation message.

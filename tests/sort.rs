@@ -1,10 +1,13 @@
-//! GPU key–value sorts on the local device, validation on, for both light sorters:
+//! GPU key–value sorts on the local device, validation on, for both light sorters and the one
+//! that picks between them by size (`auto`, stable above its switch):
 //! - radix (stable): the output equals a stable sort of the input;
 //! - bitonic (not stable): the keys equal `sort` of the input keys and the (key, value) multiset
 //!   is unchanged.
 //!
 //! Lengths 0–3, 127–129; for the radix sort 255–257, 2047 and every length from one tile to two
 //! tiles + 1 (2048..=4097: the edge of the single-workgroup path and every partial last tile);
+//! for the size-picked sort (`auto`) both sides of its switch from the bitonic to the radix sort
+//! (2^15 − 1..=2^15 + 1) and a few lengths below and above it;
 //! for the bitonic sort every length from one block (4·W) to two blocks + 1 and from one piece
 //! (`g·k`, the largest pair merged without splitters) to two pieces + 1; and 2^20 (+17); on
 //! all-equal, sorted, reverse, few-distinct and random keys. The radix sort also runs at every
@@ -13,7 +16,7 @@
 //! device picks by size, `render::sort::CHAINED_UP_TO_PAIRS`).
 mod common;
 use host::gpu::Gpu;
-use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind};
+use host::render::sort::{CrossTile, LightSorter, RadixSort, SortKind, SMALL_SORT_PAIRS};
 use host::vk::Buffer;
 use shaders::bitonic::{sample_stride, BLOCK, SPLITTER_KEEP};
 use shaders::radix::RADIX_TILE;
@@ -34,21 +37,19 @@ fn check_bits(gpu: &Gpu, sorter: &LightSorter, keys: &[u32], key_bits: u32, what
     let mut expected: Vec<(u32, u32)> = keys.iter().copied().zip(values).collect();
     let mut got: Vec<(u32, u32)> = k.into_iter().zip(v).collect();
     let kind = match sorter {
-        LightSorter::Radix(_) => {
-            expected.sort_by_key(|e| e.0); // stable: equal keys keep index order
-            "radix"
-        }
-        LightSorter::Bitonic(_) => {
-            expected.sort_by_key(|e| e.0);
-            let keys_differ = got.iter().zip(&expected).position(|(a, b)| a.0 != b.0);
-            if let Some(i) = keys_differ {
-                panic!("bitonic, {what} (n = {n}): keys differ first at {i}");
-            }
-            got.sort_unstable();
-            expected.sort_unstable();
-            "bitonic"
-        }
+        LightSorter::Radix(_) => "radix",
+        LightSorter::Bitonic(_) => "bitonic",
+        LightSorter::Auto { .. } => "auto",
     };
+    expected.sort_by_key(|e| e.0); // stable: equal keys keep index order
+    if !sorter.stable(n as u32) {
+        let keys_differ = got.iter().zip(&expected).position(|(a, b)| a.0 != b.0);
+        if let Some(i) = keys_differ {
+            panic!("{kind}, {what} (n = {n}): keys differ first at {i}");
+        }
+        got.sort_unstable();
+        expected.sort_unstable();
+    }
     if got != expected {
         let first = got.iter().zip(&expected).position(|(a, b)| a != b);
         panic!("{kind}, {what} (n = {n}): first difference at {first:?}");
@@ -62,14 +63,18 @@ fn lengths(gpu: &Gpu, kind: SortKind) -> Vec<usize> {
         lengths.extend([255, 256, 257, tile - 1]);
         lengths.extend(tile..=2 * tile + 1); // every size from one tile to two tiles + 1
     }
+    if kind == SortKind::Auto {
+        let small = SMALL_SORT_PAIRS as usize;
+        lengths.extend([BLOCK as usize + 1, RADIX_TILE as usize + 1, small - 1, small, small + 1, 2 * small + 3]);
+    }
     if kind == SortKind::Bitonic {
         let w = gpu.ctx.info.min_subgroup_size;
         let (block, piece) = (BLOCK as usize, (SPLITTER_KEEP * sample_stride(w)) as usize);
         lengths.extend(block..=2 * block + 1);
         lengths.extend(piece..=2 * piece + 1);
-        lengths.sort_unstable();
-        lengths.dedup();
     }
+    lengths.sort_unstable();
+    lengths.dedup();
     lengths
 }
 
@@ -94,7 +99,7 @@ fn small_and_partial_lengths(kind: SortKind) {
     for sorter in sorters(&gpu, kind, capacity) {
         for &n in &lengths {
             for (what, keys) in inputs(n, n as u32 + 1) {
-                let edge = [0..=3, 127..=129, 255..=257, 2047..=2049, 4095..=4097].iter().any(|r| r.contains(&n));
+                let edge = [0..=3, 127..=129, 255..=257, 1023..=1025, 2047..=2049, 4095..=4097, 32767..=32769].iter().any(|r| r.contains(&n));
                 if !edge && what != "random" {
                     continue; // every shape at the edges, random keys at every length
                 }
@@ -156,6 +161,20 @@ fn radix_refuses_bad_input() {
     assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
     let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 50, 33)).unwrap_err().to_string();
     assert!(err.contains("keys of 33 bits"), "{err}");
+    common::assert_clean(&gpu);
+}
+
+/// The default light sort: the bitonic block sort up to one block, the radix sort above; around
+/// the switch, and a capacity below a block that refuses more pairs than it holds.
+#[test]
+fn auto_sorts_on_both_sides_of_the_switch() {
+    small_and_partial_lengths(SortKind::Auto);
+    let gpu = common::gpu();
+    let sorter = LightSorter::new(&gpu, SortKind::Auto, 100).unwrap();
+    let kb = Buffer::from_slice(&gpu.ctx, "keys", &[0u32; 200]).unwrap();
+    let vb = Buffer::from_slice(&gpu.ctx, "values", &[0u32; 200]).unwrap();
+    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 101, 30)).unwrap_err().to_string();
+    assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
     common::assert_clean(&gpu);
 }
 

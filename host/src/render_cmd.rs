@@ -62,8 +62,9 @@ pub struct RenderArgs {
     /// G-buffer raster on the async-compute queue (devices without one always do).
     #[arg(long)]
     pub no_async_compute: bool,
-    /// GPU sort of the lights' Morton keys for `clustered-bvh`.
-    #[arg(long, value_enum, default_value_t = crate::render::sort::SortKind::Radix)]
+    /// GPU sort of the lights' Morton keys for `clustered-bvh`: `auto` takes the bitonic sort up
+    /// to 32 768 lights (faster there on the H200) and the radix sort above.
+    #[arg(long, value_enum, default_value_t = crate::render::sort::SortKind::Auto)]
     pub sort: crate::render::sort::SortKind,
     /// Layout of the per-tile light lists for `forward-plus`: `linked` lists built with atomics
     /// (each fragment walks its tile's list), or contiguous `array`s the culling writes (each

@@ -1,5 +1,6 @@
 //! GPU key–value radix sort (`shaders::radix`, whose doc describes the design): 8-bit digits,
-//! only the passes `key_bits` needs, tiles of `RADIX_TILE` = 2048 keys.
+//! only the passes `key_bits` needs, tiles of `RADIX_TILE` = 2048 keys; and the light sort that
+//! picks it or the bitonic sort ([`LightSorter`], `render --sort`).
 //!
 //! Recorded per sort of `n` pairs:
 //! - `n ≤ RADIX_TILE`: one workgroup sorts in place (`radix_sort_tile`): one dispatch;
@@ -21,6 +22,7 @@
 //! Scratch memory: `8 · capacity` B (keys + values) when `capacity > RADIX_TILE`, 4 KiB of
 //! histogram, and `2 · 4 · 256 · ⌈capacity / 2048⌉` B of tile counts and starts
 //! (reduce-then-scan) or half that of status words (chained): ≈ 9 B per pair.
+use super::bitonic::BitonicSort;
 use crate::gpu::Gpu;
 use crate::vk::fold;
 use crate::vk::{Buffer, DeviceInfo, Recorder, VkError, VkResult};
@@ -176,24 +178,43 @@ impl RadixSort {
 /// Which GPU sort orders the lights' Morton keys (`render --sort`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum SortKind {
-    /// LSD radix sort ([`RadixSort`]), stable.
+    /// By size: the bitonic sort up to [`SMALL_SORT_PAIRS`] (not stable), the radix sort
+    /// above.
     #[default]
+    Auto,
+    /// LSD radix sort ([`RadixSort`]), stable.
     Radix,
-    /// Bitonic-warp merge sort ([`super::bitonic::BitonicSort`]).
+    /// Bitonic-warp merge sort ([`BitonicSort`]).
     Bitonic,
 }
 
-/// The light sort of `clustered-bvh`: one of the two GPU key–value sorts, same interface.
+/// Most pairs [`SortKind::Auto`] gives the bitonic sort. Measured on an NVIDIA H200
+/// (`benches/sort.rs`, uniform 30-bit keys, GPU ms bitonic / radix, two runs alike): 1 000 0.029 /
+/// 0.044 (both one workgroup: the bitonic network's fixed steps beat four ranked radix passes),
+/// 2 048 0.045 / 0.045, 4 096 0.061 / 0.092, 10 000 0.095 / 0.107, 32 768 0.113 / 0.123, 65 536
+/// 0.132 / 0.126, 1M 0.49 / 0.19: the radix sort's fixed cost per pass (one dispatch each) wins
+/// once its work per pass outgrows the bitonic's extra merge levels.
+pub const SMALL_SORT_PAIRS: u32 = 1 << 15;
+
+/// The light sort of `clustered-bvh`: one of the two GPU key–value sorts, or both picked by size
+/// ([`SortKind::Auto`]); same interface.
 pub enum LightSorter {
     Radix(Box<RadixSort>),
-    Bitonic(Box<super::bitonic::BitonicSort>),
+    Bitonic(Box<BitonicSort>),
+    /// The bitonic sort for at most [`SMALL_SORT_PAIRS`] (planned for no more), the radix sort
+    /// above.
+    Auto { small: Box<BitonicSort>, large: Box<RadixSort> },
 }
 
 impl LightSorter {
     pub fn new(gpu: &Gpu, kind: SortKind, capacity: u32) -> VkResult<Self> {
         Ok(match kind {
             SortKind::Radix => Self::Radix(Box::new(RadixSort::new(gpu, capacity)?)),
-            SortKind::Bitonic => Self::Bitonic(Box::new(super::bitonic::BitonicSort::new(gpu, capacity)?)),
+            SortKind::Bitonic => Self::Bitonic(Box::new(BitonicSort::new(gpu, capacity)?)),
+            SortKind::Auto => Self::Auto {
+                small: Box::new(BitonicSort::new(gpu, capacity.min(SMALL_SORT_PAIRS))?),
+                large: Box::new(RadixSort::new(gpu, capacity)?),
+            },
         })
     }
 
@@ -202,6 +223,16 @@ impl LightSorter {
         match self {
             Self::Radix(s) => s.bytes(),
             Self::Bitonic(s) => s.bytes(),
+            Self::Auto { small, large } => small.bytes() + large.bytes(),
+        }
+    }
+
+    /// Whether equal keys keep their input order for a sort of `n` pairs.
+    pub fn stable(&self, n: u32) -> bool {
+        match self {
+            Self::Radix(_) => true,
+            Self::Bitonic(_) => false,
+            Self::Auto { small, .. } => n > small.capacity,
         }
     }
 
@@ -210,6 +241,10 @@ impl LightSorter {
         match self {
             Self::Radix(s) => s.record(gpu, rec, keys, values, n, key_bits),
             Self::Bitonic(s) => s.record(gpu, rec, keys, values, n, key_bits),
+            // `small` is planned for min(capacity, SMALL_SORT_PAIRS): past that the radix sort
+            // records (or refuses a count beyond its buffers).
+            Self::Auto { small, .. } if n <= small.capacity => small.record(gpu, rec, keys, values, n, key_bits),
+            Self::Auto { large, .. } => large.record(gpu, rec, keys, values, n, key_bits),
         }
     }
 }
