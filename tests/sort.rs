@@ -150,30 +150,33 @@ fn radix_every_key_width() {
     common::assert_clean(&gpu);
 }
 
+/// The error of recording a sort of `n` pairs of `key_bits`-bit keys with a `kind` sorter made
+/// for 100 pairs (buffers of 200).
+fn refusal(gpu: &Gpu, kind: SortKind, n: u32, key_bits: u32) -> String {
+    let sorter = LightSorter::new(gpu, kind, 100).unwrap();
+    let kb = Buffer::from_slice(&gpu.ctx, "keys", &[0u32; 200]).unwrap();
+    let vb = Buffer::from_slice(&gpu.ctx, "values", &[0u32; 200]).unwrap();
+    gpu.run(None, |rec| sorter.record(gpu, rec, &kb, &vb, n, key_bits)).unwrap_err().to_string()
+}
+
 /// More pairs than the buffers were made for, or keys wider than 32 bits: an error, no dispatch.
 #[test]
 fn radix_refuses_bad_input() {
     let gpu = common::gpu();
-    let sorter = LightSorter::new(&gpu, SortKind::Radix, 100).unwrap();
-    let kb = Buffer::from_slice(&gpu.ctx, "keys", &[0u32; 200]).unwrap();
-    let vb = Buffer::from_slice(&gpu.ctx, "values", &[0u32; 200]).unwrap();
-    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 101, 30)).unwrap_err().to_string();
+    let err = refusal(&gpu, SortKind::Radix, 101, 30);
     assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
-    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 50, 33)).unwrap_err().to_string();
+    let err = refusal(&gpu, SortKind::Radix, 50, 33);
     assert!(err.contains("keys of 33 bits"), "{err}");
     common::assert_clean(&gpu);
 }
 
-/// The default light sort: the bitonic block sort up to one block, the radix sort above; around
-/// the switch, and a capacity below a block that refuses more pairs than it holds.
+/// The default light sort: the bitonic sort up to `SMALL_SORT_PAIRS`, the radix sort above;
+/// around the switch, and a capacity below it that refuses more pairs than it holds.
 #[test]
 fn auto_sorts_on_both_sides_of_the_switch() {
     small_and_partial_lengths(SortKind::Auto);
     let gpu = common::gpu();
-    let sorter = LightSorter::new(&gpu, SortKind::Auto, 100).unwrap();
-    let kb = Buffer::from_slice(&gpu.ctx, "keys", &[0u32; 200]).unwrap();
-    let vb = Buffer::from_slice(&gpu.ctx, "values", &[0u32; 200]).unwrap();
-    let err = gpu.run(None, |rec| sorter.record(&gpu, rec, &kb, &vb, 101, 30)).unwrap_err().to_string();
+    let err = refusal(&gpu, SortKind::Auto, 101, 30);
     assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
     common::assert_clean(&gpu);
 }
