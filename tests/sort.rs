@@ -11,7 +11,8 @@
 //! for the bitonic sort every length from one block (4·W) to two blocks + 1 and from one piece
 //! (`g·k`, the largest pair merged without splitters) to two pieces + 1; and 2^20 (+17); on
 //! all-equal, sorted, reverse, few-distinct and random keys. The radix sort also runs at every
-//! key width's pass count (odd counts end with a copy) and refuses bad input with an error. Where
+//! key width's pass count (odd counts end with a copy) and refuses bad input with an error, as
+//! every sorter refuses more pairs than its buffers. Where
 //! the device runs the chained scan, the radix lengths run on both cross-tile variants (the
 //! device picks by size, `render::sort::CHAINED_UP_TO_PAIRS`).
 mod common;
@@ -177,6 +178,15 @@ fn auto_sorts_on_both_sides_of_the_switch() {
     small_and_partial_lengths(SortKind::Auto);
     let gpu = common::gpu();
     let err = refusal(&gpu, SortKind::Auto, 101, 30);
+    assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
+    common::assert_clean(&gpu);
+}
+
+/// More pairs than the bitonic sort's plan: the same error as the radix sort's, no dispatch.
+#[test]
+fn bitonic_refuses_more_pairs_than_its_buffers() {
+    let gpu = common::gpu();
+    let err = refusal(&gpu, SortKind::Bitonic, 101, 30);
     assert!(err.contains("sorting 101 pairs with buffers for 100"), "{err}");
     common::assert_clean(&gpu);
 }

@@ -14,7 +14,7 @@
 //! the largest level at `capacity` (≈ n/16 B at W = 8, n/64 B at W = 32).
 use crate::vk::fold;
 use crate::gpu::Gpu;
-use crate::vk::{Buffer, Recorder, VkResult};
+use crate::vk::{Buffer, Recorder, VkError, VkResult};
 use shaders::bitonic::{level, level_count, splitter_keep, Level, BLOCK, SPLITTER_WORKGROUP};
 use shaders::layout::BitonicParams;
 
@@ -72,7 +72,9 @@ impl BitonicSort {
     /// Records a sort of `keys[..n]` (values follow). `key_bits` is accepted for the same shape
     /// as `RadixSort::record`; a comparison sort does not need it.
     pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, keys: &Buffer, values: &Buffer, n: u32, _key_bits: u32) -> VkResult<()> {
-        assert!(n <= self.capacity, "sorting {n} keys with a plan for {}", self.capacity);
+        if n > self.capacity {
+            return Err(VkError::Kernel { entry: "bitonic sort", what: format!("sorting {n} pairs with buffers for {}", self.capacity) });
+        }
         if n <= 1 {
             return Ok(());
         }
