@@ -134,6 +134,8 @@ const BATCH: u32 = 8;
 /// The unsorted pairs on the GPU (`src_*`, never sorted) and the buffers sorted in place.
 struct Inputs {
     n: u32,
+    /// Bits the sorts order by ([`key_bits`]).
+    key_bits: u32,
     src_keys: Buffer,
     src_values: Buffer,
     keys: Buffer,
@@ -145,6 +147,7 @@ impl Inputs {
         let ctx = &gpu.ctx;
         Self {
             n: k.len() as u32,
+            key_bits: key_bits(),
             src_keys: Buffer::from_slice(ctx, "bench keys (unsorted)", k).expect("keys"),
             src_values: Buffer::from_slice(ctx, "bench values (unsorted)", values).expect("values"),
             keys: Buffer::from_slice(ctx, "bench keys", k).expect("keys"),
@@ -165,7 +168,7 @@ impl Inputs {
             for _ in 0..BATCH {
                 rec.copy(&self.src_keys, &self.keys, bytes)?;
                 rec.copy(&self.src_values, &self.values, bytes)?;
-                rec.pass("sort", |rec| sorter.record(gpu, rec, &self.keys, &self.values, self.n, key_bits()))?;
+                rec.pass("sort", |rec| sorter.record(gpu, rec, &self.keys, &self.values, self.n, self.key_bits))?;
             }
             Ok(())
         })
