@@ -208,7 +208,7 @@ fn heatmap_shows_the_transparent_fragments_lists() {
     for m in bare.meshes.iter_mut().filter(|m| transparent[m.material as usize]) {
         m.indices.clear();
     }
-    let techniques = [Technique::Deferred, Technique::ClusteredNaive, Technique::ClusteredBvh, Technique::ClusteredAabb, Technique::ForwardPlus];
+    let techniques: Vec<Technique> = Technique::ALL.iter().copied().filter(|t| t.draws_transparency()).collect();
     let s = |technique, view| Settings { technique, view, oit: OitVariant::Exact, ..settings(64, 36, Technique::Deferred) };
     // 1.
     let mut huge = lights::uniform(&glass, 40, 3).unwrap();
@@ -216,7 +216,7 @@ fn heatmap_shows_the_transparent_fragments_lists() {
         l.radius = 1.0e5;
     }
     let all = shaders::lighting::encode_srgb8(shaders::lighting::heat_ramp(huge.len() as u32, host::render::HEAT_MAX));
-    for technique in techniques {
+    for &technique in &techniques {
         let heat = frame(&gpu, &glass, &huge, &s(technique, View::Heatmap));
         assert!(heat.transparency.unwrap().max_layers > 8, "{technique:?}: the stack's layers");
         let depth = &heat.readback.as_ref().unwrap().depth;
@@ -230,7 +230,7 @@ fn heatmap_shows_the_transparent_fragments_lists() {
     let shaded = frame(&gpu, &glass, &l, &s(Technique::Deferred, View::Shaded));
     let covered: Vec<bool> = shaded.pixels.iter().zip(&frame(&gpu, &bare, &l, &s(Technique::Deferred, View::Shaded)).pixels).map(|(a, b)| a != b).collect();
     assert!(covered.iter().filter(|&&c| c).count() * 4 > covered.len(), "glass@stack: the glass covers much of the frame");
-    for technique in techniques {
+    for &technique in &techniques {
         let with = frame(&gpu, &glass, &l, &s(technique, View::Heatmap));
         let without = frame(&gpu, &bare, &l, &s(technique, View::Heatmap));
         let changed: Vec<bool> = with.pixels.iter().zip(&without.pixels).map(|(a, b)| a != b).collect();

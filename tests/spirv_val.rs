@@ -3,11 +3,28 @@
 //! note), and the entry-point lists of `shaders::kernels` describe the modules exactly: every
 //! entry point of a module is listed and every listed name is an entry point of the right
 //! stage; each compute handle's workgroup size is the entry's `LocalSize`, and the storage
-//! buffers the entry uses are exactly those the host binds (set 0, bindings `0..n`).
+//! buffers the entry uses are exactly those the host binds (set 0, bindings `0..n`). A
+//! registered technique's own kernels (`Description::own_kernels`, `own_raster`) count as listed.
 mod common;
 use common::spirv::{entry_points, EntryPoint, FRAGMENT, GL_COMPUTE, VERTEX};
-use shaders::kernels;
+use host::render::Technique;
+use shaders::kernels::{self, Kernel};
 use std::collections::BTreeSet;
+
+/// Every compute handle: `shaders::kernels::ALL` and the registered techniques' own.
+fn compute_handles() -> Vec<Kernel<()>> {
+    let own = Technique::ALL.iter().flat_map(|t| t.description().own_kernels.iter().copied());
+    kernels::ALL.iter().copied().chain(own).collect()
+}
+
+/// Every entry name of a raster stage: `listed`, and that stage's entries of the registered
+/// techniques' own raster handles (`stage` picks vertex or fragment), each once.
+fn raster_names(listed: &[&'static str], stage: fn(&kernels::RasterKernel<()>) -> &'static str) -> Vec<&'static str> {
+    let mut own: Vec<&'static str> = Technique::ALL.iter().flat_map(|t| t.description().own_raster.iter().map(stage)).collect();
+    own.sort_unstable();
+    own.dedup();
+    listed.iter().copied().chain(own.into_iter().filter(|n| !listed.contains(n))).collect()
+}
 
 /// The environment both modules are built for (`host/build.rs`: `spirv-unknown-vulkan1.3`).
 const TARGET_ENV: &str = "vulkan1.3";
@@ -52,10 +69,11 @@ fn assert_same_names(entries: &[EntryPoint], model: u32, listed: &[&str], what: 
 #[test]
 fn every_kernel_handle_names_an_entry_point() {
     let entries = entry_points(host::gpu::COMPUTE_SPV);
-    let names: Vec<&str> = kernels::ALL.iter().map(|k| k.entry).collect();
+    let handles = compute_handles();
+    let names: Vec<&str> = handles.iter().map(|k| k.entry).collect();
     assert_same_names(&entries, GL_COMPUTE, &names, "compute module");
     assert!(entries.iter().all(|e| e.model == GL_COMPUTE), "the compute module holds only compute entries");
-    for k in kernels::ALL {
+    for k in &handles {
         let e = entries.iter().find(|e| e.name == k.entry).unwrap();
         assert_eq!(e.local_size, Some(k.workgroup_size), "{}: the handle's workgroup size is not the entry's LocalSize", k.entry);
         let bound: Vec<(u32, u32)> = (0..k.storage_buffers).map(|b| (0, b)).collect();
@@ -66,8 +84,8 @@ fn every_kernel_handle_names_an_entry_point() {
 #[test]
 fn every_raster_entry_name_names_an_entry_point() {
     let entries = entry_points(host::gpu::GRAPHICS_SPV);
-    assert_same_names(&entries, VERTEX, kernels::VERTEX_ENTRIES, "raster module, vertex stage");
-    assert_same_names(&entries, FRAGMENT, kernels::FRAGMENT_ENTRIES, "raster module, fragment stage");
+    assert_same_names(&entries, VERTEX, &raster_names(kernels::VERTEX_ENTRIES, |k| k.vertex), "raster module, vertex stage");
+    assert_same_names(&entries, FRAGMENT, &raster_names(kernels::FRAGMENT_ENTRIES, |k| k.fragment), "raster module, fragment stage");
     let others: Vec<_> = entries.iter().filter(|e| e.model != VERTEX && e.model != FRAGMENT).map(|e| &e.name).collect();
     assert!(others.is_empty(), "raster module: entries of other stages {others:?}");
 }

@@ -1,5 +1,7 @@
-//! The baseline techniques (`tiled`, `tiled-2.5d`, `clustered-aabb`, `forward-plus` with both
-//! layouts of its tile lists, `--fp-lists linked|array`) on the local device (lavapipe in CI),
+//! Every registered technique but `deferred` and the two that read `--unique-clusters` (those
+//! run with each of its values in `tests/render.rs`) — `tiled`, `tiled-2.5d`, `clustered-aabb`,
+//! `forward-plus` with both layouts of its tile lists (`--fp-lists linked|array`) and any technique
+//! registered later — on the local device (lavapipe in CI),
 //! validation on: each image equals the brute-force `deferred` reference (≤ 1/255 per channel
 //! after tonemapping) on city and Sponza at 1k and 10k lights, on a view with a large depth
 //! discontinuity, and when a fixed capacity overflows (2000 coincident lights: the tiled list
@@ -8,23 +10,21 @@
 //! give the same image and hold the same lists per tile.
 mod common;
 use common::pixels::{lit, worst_channel};
-use common::render::{asset_scene, city, frame, label, render_error, Run};
+use common::render::{asset_scene, city, frame, label, render_error, runs, Run};
 use host::gpu::Gpu;
 use host::render::forward_plus::TileLists;
-use host::render::{Frame, Settings, Technique};
+use host::render::{Frame, Knob, Settings, Technique};
 use std::collections::BTreeSet;
 use host::scene::{lights, view_camera, Scene};
 use shaders::layout::{PointLight, View};
 use shaders::octahedral::Precision;
 
-/// Every technique of this file, Forward+ with each layout of its tile lists.
-const RUNS: [Run; 5] = [
-    (Technique::Tiled, TileLists::Linked),
-    (Technique::Tiled25d, TileLists::Linked),
-    (Technique::ClusteredAabb, TileLists::Linked),
-    (Technique::ForwardPlus, TileLists::Linked),
-    (Technique::ForwardPlus, TileLists::Array),
-];
+/// Every technique of this file (module docs), from the registry; Forward+ with each layout of
+/// its tile lists.
+fn runs_here() -> Vec<Run> {
+    let here: Vec<Technique> = Technique::ALL.iter().copied().filter(|&t| t != Technique::Deferred && !t.reads(Knob::UniqueClusters)).collect();
+    runs(&here)
+}
 
 /// The test settings with `tile_size` px tiles.
 fn settings(w: u32, h: u32, technique: Technique, tile_size: u32) -> Settings {
@@ -38,9 +38,9 @@ fn run_settings(w: u32, h: u32, (technique, fp_lists): Run, tile_size: u32) -> S
 
 
 /// Renders the reference and every run (16 px tiles, the tiled default of the papers) and
-/// asserts equality; returns the frames in [`RUNS`] order.
+/// asserts equality; returns the frames in [`runs_here`] order.
 fn assert_equal_to_reference(gpu: &Gpu, scene: &Scene, lights: &[PointLight], w: u32, h: u32, what: &str) -> Vec<Frame> {
-    assert_equal_for(gpu, scene, lights, w, h, what, &RUNS)
+    assert_equal_for(gpu, scene, lights, w, h, what, &runs_here())
 }
 
 /// As [`assert_equal_to_reference`] for the given runs; where both Forward+ layouts ran, their
@@ -75,7 +75,7 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     let scene = city();
     for n in [1_000, 10_000] {
         let l = lights::uniform(&scene, n, 7).unwrap();
-        for (&run, f) in RUNS.iter().zip(assert_equal_to_reference(&gpu, &scene, &l, 160, 90, &format!("city {n}"))) {
+        for (run, f) in runs_here().into_iter().zip(assert_equal_to_reference(&gpu, &scene, &l, 160, 90, &format!("city {n}"))) {
             let tiles = 10 * 6;
             assert!(f.light_refs > 0 && (f.light_refs as usize) < tiles * n / 2, "city {n}, {}: {} light references", label(run), f.light_refs);
         }
@@ -150,7 +150,7 @@ fn coincident_lights_overflow_and_stay_exact() {
     let at = (scene.camera.position + fwd * 25.0).to_array();
     let l: Vec<PointLight> = (0..2000).map(|_| PointLight { position: at, radius: 15.0, colour: [1.0, 0.9, 0.8], intensity: 0.05 }).collect();
     let frames = assert_equal_to_reference(&gpu, &scene, &l, 128, 72, "2000 coincident lights");
-    for (&run, f) in RUNS.iter().zip(&frames) {
+    for (run, f) in runs_here().into_iter().zip(&frames) {
         let t = label(run);
         match run.0 {
             Technique::Tiled | Technique::Tiled25d => assert!(
@@ -176,7 +176,7 @@ fn tile_sizes_and_odd_resolutions() {
     let l = lights::uniform(&scene, 500, 3).unwrap();
     for (w, h, tile) in [(97, 61, 8), (97, 61, 32), (33, 17, 16), (1, 1, 16)] {
         let reference = frame(&gpu, &scene, &l, &settings(w, h, Technique::Deferred, tile));
-        for run in RUNS {
+        for run in runs_here() {
             let f = frame(&gpu, &scene, &l, &run_settings(w, h, run, tile));
             let worst = worst_channel(&reference.pixels, &f.pixels);
             assert!(worst <= 1, "{w}x{h}, {tile} px tiles, {}: differs from deferred by {worst}/255", label(run));
@@ -195,7 +195,7 @@ fn seventy_thousand_lights_all_visited() {
     let scene = city();
     let l = lights::uniform(&scene, 70_000, 13).unwrap();
     let llvmpipe = gpu.ctx.info.is_llvmpipe();
-    let runs: Vec<Run> = RUNS.iter().copied().filter(|&(t, _)| !(llvmpipe && t == Technique::ForwardPlus)).collect();
+    let runs: Vec<Run> = runs_here().into_iter().filter(|&(t, _)| !(llvmpipe && t == Technique::ForwardPlus)).collect();
     assert_equal_for(&gpu, &scene, &l, 48, 27, "city 70k", &runs);
     if llvmpipe {
         for lists in TileLists::ALL {

@@ -21,7 +21,6 @@ use anyhow::Result;
 use shaders::cluster_key::{MAX_DIMENSION, MAX_TILE_SIZE};
 use shaders::layout::PointLight;
 use shaders::octahedral::Precision;
-use shaders::tile_cull::MAX_TILED_TILE;
 
 /// Bytes per pixel every technique allocates at least: the G-buffer's depth, normal and albedo
 /// targets and their storage copies (4 + 4 or 16 + 4 bytes each), and the RGBA8 frame.
@@ -30,10 +29,6 @@ pub fn frame_bytes_per_pixel(precision: Precision) -> u64 {
     2 * gbuffer + 4
 }
 
-/// The command-line name of a technique.
-fn technique_name(t: Technique) -> String {
-    clap::ValueEnum::to_possible_value(&t).map_or_else(|| format!("{t:?}"), |v| v.get_name().to_owned())
-}
 
 fn mib(bytes: u64) -> String {
     format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
@@ -74,12 +69,12 @@ pub fn check_frame(info: &DeviceInfo, width: u32, height: u32, tile_size: u32, p
     Ok(())
 }
 
-/// `--tile-size` for a technique: the tiled techniques and Forward+ cull tiles of at most
-/// `MAX_TILED_TILE` px.
+/// `--tile-size` for a technique: at most its [`crate::render::Description::max_tile`] (the tiled
+/// techniques and Forward+ cull tiles of at most `MAX_TILED_TILE` px).
 pub fn check_tile_for(technique: Technique, tile_size: u32) -> Result<()> {
-    let tiled = matches!(technique, Technique::Tiled | Technique::Tiled25d | Technique::ForwardPlus);
-    if tiled && tile_size > MAX_TILED_TILE {
-        bail_input!("--tile-size {tile_size} is out of range for {}: tiles of at most {MAX_TILED_TILE} px", technique_name(technique));
+    match technique.description().max_tile {
+        Some(max) if tile_size > max => bail_input!("--tile-size {tile_size} is out of range for {}: tiles of at most {max} px", technique.name()),
+        _ => {}
     }
     Ok(())
 }
@@ -97,11 +92,7 @@ pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u
         (range / std::mem::size_of::<PointLight>() as u64, format!("32-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange)", info.name, mib(range))),
     ];
     if is_llvmpipe(info) {
-        let n = match technique {
-            Technique::Tiled | Technique::Tiled25d => shaders::tiled::max_lights_llvmpipe(tile_size.max(1)),
-            Technique::ForwardPlus => shaders::forward_plus::MAX_LIGHTS_LLVMPIPE,
-            _ => shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE,
-        };
+        let n = (technique.description().llvmpipe_lights)(tile_size.max(1));
         limits.push((n as u64, "lavapipe's loop limiter ends an invocation's loops after 65 535 iterations".to_string()));
     }
     limits.into_iter().min_by_key(|l| l.0).expect("at least one limit")
@@ -112,7 +103,7 @@ pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u
 pub fn check_lights(info: &DeviceInfo, technique: Technique, tile_size: u32, n: u64, what: &str) -> Result<()> {
     let (max, why) = max_lights(info, technique, tile_size);
     if n > max {
-        bail_input!("{what}: {n} lights, but {} takes at most {max} here ({why})", technique_name(technique));
+        bail_input!("{what}: {n} lights, but {} takes at most {max} here ({why})", technique.name());
     }
     Ok(())
 }

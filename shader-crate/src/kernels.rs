@@ -25,7 +25,8 @@ pub struct Kernel<P> {
 }
 
 impl<P> Kernel<P> {
-    const fn new(entry: &'static str, storage_buffers: u32, workgroup_size: [u32; 3], cooperative: bool) -> Self {
+    /// A handle (a technique's own kernels are declared beside its entries with this).
+    pub const fn new(entry: &'static str, storage_buffers: u32, workgroup_size: [u32; 3], cooperative: bool) -> Self {
         Self { entry, storage_buffers, workgroup_size, cooperative, _params: PhantomData }
     }
 
@@ -221,8 +222,20 @@ pub struct RasterKernel<P> {
 }
 
 impl<P> RasterKernel<P> {
-    const fn new(vertex: &'static str, fragment: &'static str, fragment_storage_buffers: u32, fragment_samplers: u32) -> Self {
-        Self { vertex, fragment, vertex_storage_buffers: RASTER_VERTEX_BUFFERS, fragment_storage_buffers, fragment_samplers, _params: PhantomData }
+    /// A pass drawing scene geometry: its vertex stage binds the [`RASTER_VERTEX_BUFFERS`].
+    pub const fn new(vertex: &'static str, fragment: &'static str, fragment_storage_buffers: u32, fragment_samplers: u32) -> Self {
+        Self::with_vertex_buffers(vertex, fragment, RASTER_VERTEX_BUFFERS, fragment_storage_buffers, fragment_samplers)
+    }
+
+    /// A pass whose vertex stage binds `vertex_storage_buffers` buffers of its own (a draw of
+    /// something else than the scene's meshes).
+    pub const fn with_vertex_buffers(vertex: &'static str, fragment: &'static str, vertex_storage_buffers: u32, fragment_storage_buffers: u32, fragment_samplers: u32) -> Self {
+        Self { vertex, fragment, vertex_storage_buffers, fragment_storage_buffers, fragment_samplers, _params: PhantomData }
+    }
+
+    /// The handle without its push-constant type, for lists of entries.
+    pub const fn erased(&self) -> RasterKernel<()> {
+        RasterKernel::with_vertex_buffers(self.vertex, self.fragment, self.vertex_storage_buffers, self.fragment_storage_buffers, self.fragment_samplers)
     }
 
     /// Bindings of set 0, every stage.

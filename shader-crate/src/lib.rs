@@ -32,7 +32,9 @@
 //!   `_specular` entry macro (every shading kernel, the Forward+ fragment shader included).
 //! * [`light_lists`] — light-list building: atomics, subgroup-aggregated reservation, list sinks,
 //!   the naive light search loop, llvmpipe's loop limit.
-//! * [`tile_cull`] — tile depth bounds, frustum and 2.5D mask (tiled, tiled-2.5d, Forward+).
+//! * [`tile_cull`] — tile depth bounds, frustum and 2.5D mask (tiled, tiled-2.5d, Forward+; its
+//!   pure tests also serve raster passes).
+//! * [`fragment_atomics`] — atomics on storage-buffer words from fragment shaders.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -127,7 +129,6 @@ pub mod sort_inputs;
 #[cfg(test)]
 mod test_support;
 pub mod tile_clusters;
-#[cfg(feature = "compute")]
 pub mod tile_cull;
 #[cfg(feature = "compute")]
 pub mod tessellation;
@@ -136,6 +137,12 @@ pub mod tiled;
 #[cfg(feature = "compute")]
 pub mod transparency;
 pub mod unchecked;
+#[cfg(feature = "graphics")]
+pub mod fragment_atomics;
+
+// Techniques whose kernels are files of `src/techniques/` alone: `build.rs` declares each file
+// there as a module of this root (no line to add here).
+include!(concat!(env!("OUT_DIR"), "/techniques.rs"));
 
 #[cfg(not(target_arch = "spirv"))]
 pub mod kernels;

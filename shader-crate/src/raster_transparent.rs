@@ -60,50 +60,9 @@ use crate::page_table::{self, INVALID_KEY};
 use crate::dense_grid;
 use crate::raster::{encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
 use crate::shading::{self, variant_entries, LightList, Surface};
+use crate::fragment_atomics::{atomic_add, atomic_exchange, atomic_max};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
-
-/// `fetch_add` on a storage-buffer word (queue-family scope: the raster module has no device-scope
-/// capability; relaxed). Off the GPU a plain add.
-#[inline]
-fn atomic_add(word: &mut u32, v: u32) -> u32 {
-    #[cfg(target_arch = "spirv")]
-    unsafe {
-        spirv_std::arch::atomic_i_add::<u32, { spirv_std::memory::Scope::QueueFamily as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v)
-    }
-    #[cfg(not(target_arch = "spirv"))]
-    {
-        let old = *word;
-        *word = old.wrapping_add(v);
-        old
-    }
-}
-
-/// Exchange of a storage-buffer word (as [`atomic_add`]).
-#[inline]
-fn atomic_exchange(word: &mut u32, v: u32) -> u32 {
-    #[cfg(target_arch = "spirv")]
-    unsafe {
-        spirv_std::arch::atomic_exchange::<u32, { spirv_std::memory::Scope::QueueFamily as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v)
-    }
-    #[cfg(not(target_arch = "spirv"))]
-    {
-        core::mem::replace(word, v)
-    }
-}
-
-/// Atomic max on a storage-buffer word (as [`atomic_add`]).
-#[inline]
-fn atomic_max(word: &mut u32, v: u32) {
-    #[cfg(target_arch = "spirv")]
-    unsafe {
-        spirv_std::arch::atomic_u_max::<u32, { spirv_std::memory::Scope::QueueFamily as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v);
-    }
-    #[cfg(not(target_arch = "spirv"))]
-    {
-        *word = (*word).max(v);
-    }
-}
 
 /// Sets a mark word shared by many fragments (a load first: most find it set already).
 #[inline]

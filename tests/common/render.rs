@@ -2,7 +2,7 @@
 use super::assets;
 use host::gpu::Gpu;
 use host::render::forward_plus::TileLists;
-use host::render::{self, Frame, Settings, Technique};
+use host::render::{self, Frame, Knob, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
 use shaders::layout::{PointLight, View};
@@ -31,16 +31,17 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
     }
 }
 
-/// A technique and the layout of its tile lists (`--fp-lists`; only Forward+ reads it).
+/// A technique and the layout of its tile lists (`--fp-lists`; only techniques with
+/// [`Knob::FpLists`] read it).
 pub type Run = (Technique, TileLists);
 
-/// What a test renders for `techniques`: Forward+ with both layouts of its tile lists, every other
-/// technique once (with the default layout, which it ignores).
+/// What a test renders for `techniques`: those that read `--fp-lists` with both layouts of their
+/// tile lists, every other technique once (with the default layout, which it ignores).
 pub fn runs(techniques: &[Technique]) -> Vec<Run> {
     techniques
         .iter()
         .flat_map(|&t| {
-            let layouts: &[TileLists] = if t == Technique::ForwardPlus { &TileLists::ALL } else { &[TileLists::Linked] };
+            let layouts: &[TileLists] = if t.reads(Knob::FpLists) { &TileLists::ALL } else { &[TileLists::Linked] };
             layouts.iter().map(move |&l| (t, l))
         })
         .collect()
@@ -48,9 +49,9 @@ pub fn runs(techniques: &[Technique]) -> Vec<Run> {
 
 /// A run's technique and (for Forward+) list layout, for messages.
 pub fn label((technique, lists): Run) -> String {
-    match technique {
-        Technique::ForwardPlus => format!("{technique:?} ({} lists)", lists.name()),
-        t => format!("{t:?}"),
+    match technique.reads(Knob::FpLists) {
+        true => format!("{technique:?} ({} lists)", lists.name()),
+        false => format!("{technique:?}"),
     }
 }
 

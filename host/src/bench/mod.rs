@@ -28,7 +28,7 @@ pub mod report;
 pub mod spots;
 
 use crate::gpu::Gpu;
-use crate::render::{self, Settings, Technique};
+use crate::render::{self, LightCost, Settings, Technique};
 use crate::scene::flatten::flatten;
 use crate::vk::Queue;
 use crate::scene::Scene;
@@ -216,7 +216,8 @@ pub fn parse_techniques(s: &str) -> Result<Vec<Technique>> {
 pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool, transparent: bool) -> Option<String> {
     let pairs = lights as u64 * pixels;
     let limit: u64 = if cpu_driver { 2_000_000_000 } else { 400_000_000_000 };
-    if transparent && t == Technique::Deferred {
+    let cost = t.description().cost;
+    if transparent && cost == LightCost::EveryLightPerPixel {
         // Brute force also shades every light for every transparent fragment, in a fragment
         // shader: count TRANSPARENT_LAYERS layers per pixel at FRAGMENT_COST times the cost.
         let fragment_pairs = pairs.saturating_mul(TRANSPARENT_LAYERS);
@@ -229,11 +230,11 @@ pub fn skip_reason(t: Technique, lights: usize, pixels: u64, cpu_driver: bool, t
     }
     let cluster_pairs = lights as u64 * (pixels / PIXELS_PER_CLUSTER).max(1);
     let cluster_limit = if cpu_driver { CLUSTER_PAIRS_CPU } else { CLUSTER_PAIRS_GPU };
-    match t {
-        Technique::Deferred if pairs > limit => {
+    match cost {
+        LightCost::EveryLightPerPixel if pairs > limit => {
             Some(format!("brute force would test {pairs:.3e} light–pixel pairs per frame (limit {limit:.0e}): minutes per run"))
         }
-        Technique::ClusteredNaive | Technique::ClusteredAabb if cluster_pairs > cluster_limit => Some(format!(
+        LightCost::EveryLightPerCluster if cluster_pairs > cluster_limit => Some(format!(
             "every light against every cluster: about {cluster_pairs:.3e} light–cluster pairs per frame (limit {cluster_limit:.0e}): minutes per run"
         )),
         _ => None,
@@ -291,13 +292,14 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
 fn run_rows(frame: render::Frame, name: &str, t: Technique, n: usize, culling: SpotCulling, a: &BenchArgs) -> Result<Vec<Row>> {
     ensure!(!frame.timings.is_empty(), "the device reports no GPU timestamps: nothing to measure");
     let bytes: u64 = frame.buffers.iter().map(|b| b.1).sum();
+    let brute_force = t.description().cost == LightCost::EveryLightPerPixel;
     let light_lists = match t {
-        Technique::Deferred => 1,
+        _ if brute_force => 1,
         _ if frame.unique_clusters > 0 => frame.unique_clusters,
         _ => a.width.div_ceil(a.tile_size) * a.height.div_ceil(a.tile_size),
     };
     let (lights_per_list_mean, lights_per_list_max) = match (t, frame.readback.as_ref()) {
-        (Technique::Deferred, _) => (n as f64, n as u32),
+        _ if brute_force => (n as f64, n as u32),
         (_, Some(rb)) if !rb.counts.is_empty() => {
             let st = render::reference::list_stats(rb);
             (st.mean_per_cluster, st.max_per_cluster)

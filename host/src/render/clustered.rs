@@ -54,7 +54,7 @@
 //! the BVH (`bvh.rs`); `clustered-bvh`'s staged lists, 256 B per cluster of the capacity for
 //! up to `STAGED_CLUSTERS` = 65 536 (≤ 16 MiB), shared out among the frame's clusters.
 use super::bvh::LightBvh;
-use super::technique::{grew_together, grown_capacity, initial_list_capacity, ClusterLists, FrameInputs, LightingTechnique, ListStats};
+use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, llvmpipe_chunked_lights, ClusterLists, Description, FrameInputs, Knob, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
@@ -63,6 +63,29 @@ use shaders::clustered_bvh::{STAGED_CLUSTERS, STAGED_LIGHTS};
 use shaders::cluster_key::ClusterGrid;
 use shaders::layout::*;
 use shaders::page_table::page_count;
+
+pub const CLUSTERED_NAIVE: Description = Description {
+    name: "clustered-naive",
+    summary: "Clustered deferred with unique clusters and naive (all-lights) assignment.",
+    create: |gpu, f| boxed(Clustered::naive(gpu, f)),
+    transparent: TransparentDraws::Drawn,
+    gbuffer: true,
+    cost: LightCost::EveryLightPerCluster,
+    max_tile: None,
+    llvmpipe_lights: llvmpipe_chunked_lights,
+    knobs: &[Knob::UniqueClusters],
+    own_kernels: &[],
+    own_raster: &[],
+};
+
+pub const CLUSTERED_BVH: Description = Description {
+    name: "clustered-bvh",
+    summary: "Clustered deferred with lights Morton-sorted on the GPU into a 32- or 64-ary BVH that each unique cluster walks.",
+    create: |gpu, f| boxed(Clustered::bvh(gpu, f)),
+    cost: LightCost::Culled,
+    knobs: &[Knob::UniqueClusters, Knob::LightHierarchy],
+    ..CLUSTERED_NAIVE
+};
 
 /// `clustered-naive` (`bvh` none) or `clustered-bvh`.
 pub struct Clustered {

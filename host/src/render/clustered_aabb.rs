@@ -14,13 +14,27 @@
 //! Memory: see the shader module (boxes 32 B, flags/offsets/counts 4 B each per grid cluster;
 //! active list, of `min(clusters, pixels)` entries — every cluster with transparent draws; 4 B
 //! per pixel; 4 B per light reference).
-use super::technique::{grew_together, grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{Context as _, Result};
 use shaders::clustered_aabb::{cluster_count, AABB_COUNTER_ACTIVE, AABB_COUNTER_REFS};
 use shaders::layout::{FrameParams, COUNTERS, TRANSPARENT_DENSE_GRID};
+
+pub const CLUSTERED_AABB: Description = Description {
+    name: "clustered-aabb",
+    summary: "Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from depth, staged sphere–box assignment with subgroup-aggregated atomics.",
+    create: |gpu, f| boxed(ClusteredAabb::new(gpu, f)),
+    transparent: TransparentDraws::Drawn,
+    gbuffer: true,
+    cost: LightCost::EveryLightPerCluster,
+    max_tile: None,
+    llvmpipe_lights: llvmpipe_chunked_lights,
+    knobs: &[],
+    own_kernels: &[],
+    own_raster: &[],
+};
 
 pub struct ClusteredAabb {
     clusters: u32,

@@ -2,11 +2,25 @@
 //! other technique is checked against. One kernel (`shade_deferred`); no buffers of its own but
 //! those of the transparent pass (`transparent.rs`, every light for every transparent fragment
 //! and the `--oit` resolve), for scenes with transparent draws.
-use super::technique::{FrameInputs, LightingTechnique};
+use super::technique::{boxed, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, TransparentDraws};
 use super::transparent::{OpaqueDepth, Transparency, TransparencyStats};
 use crate::gpu::Gpu;
 use crate::vk::{ImageUse, Recorder, VkResult};
 use anyhow::{Context as _, Result};
+
+pub const DEFERRED: Description = Description {
+    name: "deferred",
+    summary: "Every light for every pixel: the correctness reference.",
+    create: |gpu, f| boxed(Deferred::new(gpu, f)),
+    transparent: TransparentDraws::Drawn,
+    gbuffer: true,
+    cost: LightCost::EveryLightPerPixel,
+    max_tile: None,
+    llvmpipe_lights: llvmpipe_chunked_lights,
+    knobs: &[],
+    own_kernels: &[],
+    own_raster: &[],
+};
 
 pub struct Deferred {
     transparency: Option<Transparency>,

@@ -28,7 +28,7 @@
 //! tile and indices 4 B per light reference; both the reversed index list, and a depth, a colour
 //! and a winning-draw target (4 B per pixel each) plus the winners' buffer copy; with transparent
 //! draws 8 B per tile of depth ranges and the transparent pass's buffers.
-use super::technique::{grew_together, grown_capacity, initial_list_capacity, FrameInputs, LightingTechnique, ListStats};
+use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, Description, FrameInputs, Knob, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use super::Draw;
 use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
@@ -105,6 +105,20 @@ struct TransparentTiles {
     pass: Transparency,
     depths: Buffer,
 }
+
+pub const FORWARD_PLUS: Description = Description {
+    name: "forward-plus",
+    summary: "Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists or arrays (`--fp-lists`), forward raster shading with depth test EQUAL.",
+    create: |gpu, f| boxed(ForwardPlus::new(gpu, f)),
+    transparent: TransparentDraws::Drawn,
+    gbuffer: false,
+    cost: LightCost::Culled,
+    max_tile: Some(MAX_TILED_TILE),
+    llvmpipe_lights: |_| MAX_LIGHTS_LLVMPIPE,
+    knobs: &[Knob::FpLists],
+    own_kernels: &[],
+    own_raster: &[],
+};
 
 pub struct ForwardPlus {
     depth: Image,
@@ -240,10 +254,6 @@ impl ForwardPlus {
 }
 
 impl LightingTechnique for ForwardPlus {
-    fn uses_gbuffer(&self) -> bool {
-        false
-    }
-
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let raster = &gpu.raster;
         rec.pass("depth pre-pass", |rec| {

@@ -4,8 +4,8 @@
 //! report) and lives in its own file: `deferred.rs` (the brute-force reference), `clustered.rs`
 //! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
 //! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`; `transparent.rs`
-//! is the transparent pass every technique but the tiled ones adds for scenes with transparent
-//! materials (`tiled` and `tiled-2.5d` refuse such scenes: [`Technique::draws_transparency`]).
+//! is the transparent pass the techniques whose [`Description::transparent`] is `Drawn` add for
+//! scenes with transparent materials (the others refuse such scenes in one line).
 //! The frame loop ([`render`], a loop over the per-frame [`Renderer`] of `renderer.rs`, which the
 //! viewer drives too) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
 //! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
@@ -18,15 +18,17 @@
 //! against what the kernels assume).
 //!
 //! ## How to add a technique
-//! 1. Write `render/<name>.rs`: a struct with a constructor `fn(&Gpu, &FrameInputs) ->
-//!    Result<Self>` (allocate, check limits) and an `impl LightingTechnique` (at least `record`
-//!    and `buffers`; `grow_if_needed`, `stats` and `record_async` where it has them). Its kernels
-//!    are typed handles in `shaders::kernels`, its pipelines fields of `gpu::Kernels` /
-//!    `gpu::RasterPipelines`; it records through `vk::Recorder` (dispatches, raster passes) and
-//!    holds no `unsafe` or Vulkan types.
-//! 2. Declare the module and register it with one line in the `techniques!` list below: doc,
-//!    variant, command-line name and constructor. The CLI (`--technique`), `manylights bench`
-//!    (`--techniques all`) and the tests that iterate [`Technique::ALL`] pick it up from there.
+//! (The README's "Adding a technique" has the steps with the shader side.)
+//! 1. Write `render/<name>.rs`: a `pub const` [`Description`] (name, summary, constructor,
+//!    transparency, G-buffer use, light cost, tile and lavapipe limits, knobs, own kernels), a
+//!    struct with a constructor `fn(&Gpu, &FrameInputs) -> Result<Self>` (allocate, create its
+//!    pipelines, check limits) and an `impl LightingTechnique` (at least `record` and `buffers`;
+//!    `grow_if_needed`, `stats` and `record_async` where it has them). It records through
+//!    `vk::Recorder` (dispatches, raster passes) and holds no `unsafe` or Vulkan types.
+//! 2. Register it with one line in the `techniques!` list below: `[module] Variant =>
+//!    module::DESCRIPTION` (the brackets declare the module). The CLI (`--technique`),
+//!    `manylights bench` (`--techniques all`), the viewer, the preflight checks and the tests
+//!    that iterate [`Technique::ALL`] pick it up from there.
 pub mod bitonic;
 pub mod bvh;
 pub mod camera_relative;
@@ -56,62 +58,76 @@ pub use camera_relative::{lights_to_view, ViewTransform};
 pub use renderer::{FrameTimes, Renderer};
 use shaders::cluster_key::ClusterGrid;
 use shaders::layout::*;
+pub use technique::{Description, Knob, LightCost, TransparentDraws};
 use technique::{FrameInputs, LightingTechnique};
 use shaders::octahedral::Precision;
 
-/// Declares [`Technique`] (the command line's `--technique` values) and its constructors from one
-/// line per technique: `doc, Variant = "name" => constructor`.
+/// Declares [`Technique`] from one line per technique: `Variant => module::DESCRIPTION`, or
+/// `[module] Variant => module::DESCRIPTION` for a technique in a module of its own, which the line
+/// then declares too. Everything else about a technique is its [`Description`].
 macro_rules! techniques {
-    ($( $(#[doc = $doc:literal])* $variant:ident = $name:literal => $create:path, )*) => {
-        /// Lighting technique.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+    ($( $([$module:ident])? $variant:ident => $description:path, )*) => {
+        $( $(pub mod $module;)? )*
+
+        /// Lighting technique: one per registered [`Description`].
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Technique {
-            $( $(#[doc = $doc])* #[value(name = $name)] $variant, )*
+            $( $variant, )*
         }
 
         impl Technique {
-            /// Every technique, in registration order.
+            /// Every technique, in registration order (the bench's sweep, the viewer's number keys).
             pub const ALL: &'static [Technique] = &[$(Technique::$variant),*];
 
-            /// Whether the technique draws transparent materials (the transparent pass of
-            /// `transparent.rs`); the tiled techniques refuse scenes that have them (their lists
-            /// live in workgroup memory during one dispatch: nothing is left for a later pass).
-            pub fn draws_transparency(self) -> bool {
-                !matches!(self, Self::Tiled | Self::Tiled25d)
-            }
-
-            /// The command-line name.
-            pub fn name(self) -> &'static str {
-                match self { $(Self::$variant => $name,)* }
-            }
-
-            /// Creates the technique for a frame.
-            fn create(self, gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Box<dyn LightingTechnique>> {
-                Ok(match self { $(Self::$variant => Box::new($create(gpu, f)?),)* })
+            /// What the program knows of the technique.
+            pub fn description(self) -> &'static Description {
+                match self { $(Self::$variant => &$description,)* }
             }
         }
     };
 }
 
 techniques! {
-    /// Every light for every pixel: the correctness reference.
-    Deferred = "deferred" => deferred::Deferred::new,
-    /// Clustered deferred with unique clusters and naive (all-lights) assignment.
-    ClusteredNaive = "clustered-naive" => clustered::Clustered::naive,
-    /// Clustered deferred with lights Morton-sorted on the GPU into a 32- or 64-ary BVH that each
-    /// unique cluster walks.
-    ClusteredBvh = "clustered-bvh" => clustered::Clustered::bvh,
-    /// Tiled deferred (Olsson & Assarsson 2011; Harada et al. 2012): per screen tile, depth bounds,
-    /// frustum culling into a workgroup-memory list, shading in the same dispatch.
-    Tiled = "tiled" => tiled::Tiled::plain,
-    /// `tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.
-    Tiled25d = "tiled-2.5d" => tiled::Tiled::depth_mask,
-    /// Clustered deferred on a fixed grid with precomputed cluster boxes: active clusters from
-    /// depth, staged sphere–box assignment with subgroup-aggregated atomics.
-    ClusteredAabb = "clustered-aabb" => clustered_aabb::ClusteredAabb::new,
-    /// Forward+ (Harada et al. 2012): depth pre-pass, tiled culling into per-tile linked lists or
-    /// arrays (`--fp-lists`), forward raster shading with depth test EQUAL.
-    ForwardPlus = "forward-plus" => forward_plus::ForwardPlus::new,
+    Deferred => deferred::DEFERRED,
+    ClusteredNaive => clustered::CLUSTERED_NAIVE,
+    ClusteredBvh => clustered::CLUSTERED_BVH,
+    Tiled => tiled::TILED,
+    Tiled25d => tiled::TILED_25D,
+    ClusteredAabb => clustered_aabb::CLUSTERED_AABB,
+    ForwardPlus => forward_plus::FORWARD_PLUS,
+}
+
+impl Technique {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        self.description().name
+    }
+
+    /// Whether the technique draws transparent materials (the transparent pass of
+    /// `transparent.rs`); the others refuse scenes that have them.
+    pub fn draws_transparency(self) -> bool {
+        self.description().transparent == TransparentDraws::Drawn
+    }
+
+    /// Whether the technique reads setting `knob`.
+    pub fn reads(self, knob: Knob) -> bool {
+        self.description().knobs.contains(&knob)
+    }
+
+    /// Creates the technique for a frame.
+    fn create(self, gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Box<dyn LightingTechnique>> {
+        (self.description().create)(gpu, f)
+    }
+}
+
+impl clap::ValueEnum for Technique {
+    fn value_variants<'a>() -> &'a [Self] {
+        Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()).help(self.description().summary))
+    }
 }
 
 /// Scene data as the renderer consumes it (world space; lights are checked by

@@ -227,7 +227,7 @@ pub fn check_adaptive(technique: Technique, tolerance: f32) -> Result<()> {
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--tess-error {tolerance}: the tolerance must be a positive number of pixels");
     }
-    if technique == Technique::ForwardPlus {
+    if !technique.description().gbuffer {
         bail!("--tess-error: {} draws NURBS patches from a CPU copy of the indices; adaptive levels are drawn by the G-buffer's indirect draws (use --tess-level, or another technique)", technique.name());
     }
     Ok(())

@@ -246,7 +246,7 @@ impl Renderer {
                     if let Some(t) = &res.tessellation {
                         rec.pass("tessellation", |rec| t.record(rec, &res.geometry))?;
                     }
-                    match tech.uses_gbuffer() {
+                    match res.settings.technique.description().gbuffer {
                         true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets)),
                         false => Ok(()),
                     }
@@ -263,6 +263,11 @@ impl Renderer {
                 }
                 None => break,
             }
+        }
+        // A technique that takes a scene with transparent draws must have drawn them: one that
+        // recorded no transparent pass would have left the glass out of the frame unseen.
+        if !res.geometry.transparent.is_empty() && tech.transparency().is_none() {
+            bail!("{} recorded no transparent pass for a scene with transparent draws: their surfaces would be missing from the frame", res.settings.technique.name());
         }
         let ((mut passes, async_span), (main_passes, main_span)) = (self.async_profiler.results_and_span()?, self.profiler.results_and_span()?);
         passes.extend(main_passes);

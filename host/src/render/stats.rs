@@ -7,7 +7,7 @@ use serde_json::{json, Value};
 
 pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings, frame: &Frame) -> Value {
     let mut lists = frame.readback.as_ref().map(list_stats).unwrap_or_default();
-    if s.technique == super::Technique::Deferred {
+    if s.technique.description().cost == super::LightCost::EveryLightPerPixel {
         // Brute force evaluates every light at every pixel (and has no clusters).
         lists.mean_per_pixel = lights as f64;
         lists.max_per_pixel = lights as u32;
@@ -23,10 +23,10 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "scene": scene,
         "technique": format!("{:?}", s.technique),
         // The per-tile list layout (`--fp-lists`) where the technique has one.
-        "fp_lists": (s.technique == super::Technique::ForwardPlus).then(|| s.fp_lists.name()),
+        "fp_lists": s.technique.reads(super::Knob::FpLists).then(|| s.fp_lists.name()),
         // How the clustered techniques found the unique clusters (`--unique-clusters`, or the
         // page table where the scene has transparent draws).
-        "unique_clusters": matches!(s.technique, super::Technique::ClusteredNaive | super::Technique::ClusteredBvh)
+        "unique_clusters": s.technique.reads(super::Knob::UniqueClusters)
             .then(|| s.unique_clusters.for_frame(&frame.grid, frame.transparency.is_some()).name()),
         // The transparent pass, where the scene has transparent draws: the resolve (`--oit`),
         // fragments (the node counter), the most layers of a pixel, node-buffer bytes.

@@ -5,7 +5,7 @@
 //!    `render/mod.rs`): allocate, check limits, precompute what depends on the grid only;
 //! 2. per frame, **record**: [`LightingTechnique::record_async`] on the async-compute queue
 //!    (work that depends on the lights only), then — after the G-buffer pass, which the frame loop
-//!    records once when [`LightingTechnique::uses_gbuffer`] — [`LightingTechnique::record`] on the
+//!    records once when [`Description::gbuffer`] — [`LightingTechnique::record`] on the
 //!    main queue;
 //! 3. after the frame, **grow**: [`LightingTechnique::grow_if_needed`] reads the GPU counters
 //!    back; a view-dependent buffer that was too small is grown and the frame loop re-runs the
@@ -18,6 +18,7 @@ use super::Settings;
 use crate::gpu::Gpu;
 use crate::vk::{Binding, Buffer, Recorder, VkResult};
 use anyhow::Result;
+use shaders::kernels::{Kernel, RasterKernel};
 use shaders::layout::{FrameParams, PointLight};
 
 /// Regrowths of a frame's buffers after which the frame loop gives up (each grows a buffer to
@@ -101,14 +102,83 @@ pub struct ClusterLists {
     pub list: Vec<u32>,
 }
 
+/// Everything the program knows of a technique besides its passes: one `const` beside the
+/// technique's own code, registered with one line in `render/mod.rs` (`techniques!`). The CLI,
+/// the viewer, the preflight checks, the bench and the tests read a technique only through this.
+pub struct Description {
+    /// The command-line name (`--technique`, `--techniques`, the viewer's overlay).
+    pub name: &'static str,
+    /// One line: what the technique does and after whom (`--help`, the README's table).
+    pub summary: &'static str,
+    /// Creates the technique for a frame (allocate, check limits).
+    pub create: fn(&Gpu, &FrameInputs<'_>) -> Result<Box<dyn LightingTechnique>>,
+    /// How it meets a scene with transparent draws. No default: a technique says which.
+    pub transparent: TransparentDraws,
+    /// Whether the frame loop records the G-buffer pass before [`LightingTechnique::record`]
+    /// (Forward+ rasterises its own depth pre-pass instead, and so cannot draw adaptive NURBS
+    /// levels, which only the G-buffer's indirect draws take).
+    pub gbuffer: bool,
+    /// How its light tests grow with the frame (the bench's skip rule, `--stats`' lists).
+    pub cost: LightCost,
+    /// The largest `--tile-size` it takes (`None`: any the grid takes).
+    pub max_tile: Option<u32>,
+    /// The most lights one frame may have on lavapipe, whose loop limiter ends an invocation's
+    /// loops after 65 535 iterations, for a tile size.
+    pub llvmpipe_lights: fn(u32) -> u32,
+    /// The settings beyond the common ones that reach its kernels (`--stats` reports them, the
+    /// tests run each value).
+    pub knobs: &'static [Knob],
+    /// Compute and raster entry points of pipelines the technique creates itself (not in
+    /// `gpu::Kernels`): `tests/spirv_val.rs` checks them against the modules.
+    pub own_kernels: &'static [Kernel<()>],
+    pub own_raster: &'static [RasterKernel<()>],
+}
+
+/// How a technique meets a scene with transparent draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransparentDraws {
+    /// It records the transparent pass (`transparent.rs`): the frame loop fails a frame of a
+    /// transparent scene whose technique reports no transparent pass.
+    Drawn,
+    /// It refuses such scenes with one line naming itself and the materials.
+    Refused,
+}
+
+/// How many light tests a technique makes per frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightCost {
+    /// Every light at every pixel (brute force).
+    EveryLightPerPixel,
+    /// Every light against every cluster that holds pixels.
+    EveryLightPerCluster,
+    /// Lights culled by a hierarchy, per tile or by rasterisation: about the lights that touch.
+    Culled,
+}
+
+/// A setting of [`super::Settings`] only some techniques read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Knob {
+    /// `--fp-lists`: the layout of Forward+'s per-tile lists.
+    FpLists,
+    /// `--unique-clusters`: how the clustered techniques find the frame's clusters.
+    UniqueClusters,
+    /// `--sort` and `--bvh-branching`: the light sort and hierarchy.
+    LightHierarchy,
+}
+
+/// A technique's constructor result as [`Description::create`] returns it.
+pub fn boxed<T: LightingTechnique + 'static>(t: Result<T>) -> Result<Box<dyn LightingTechnique>> {
+    Ok(Box::new(t?))
+}
+
+/// [`Description::llvmpipe_lights`] of a technique whose loops visit a light per iteration in
+/// chunks (`shaders::light_lists`).
+pub fn llvmpipe_chunked_lights(_tile_size: u32) -> u32 {
+    shaders::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE
+}
+
 /// One lighting technique (see the module doc for the life cycle).
 pub trait LightingTechnique {
-    /// Whether the frame loop records the G-buffer pass before [`Self::record`] (Forward+
-    /// rasterises its own depth pre-pass instead).
-    fn uses_gbuffer(&self) -> bool {
-        true
-    }
-
     /// Whether [`Self::record_async`] records any work.
     fn has_async_work(&self) -> bool {
         false
@@ -177,11 +247,17 @@ mod tests {
         unique.sort_unstable();
         unique.dedup();
         assert_eq!(unique.len(), names.len(), "names are unique: {names:?}");
-        assert_eq!(
-            names,
-            ["deferred", "clustered-naive", "clustered-bvh", "tiled", "tiled-2.5d", "clustered-aabb", "forward-plus"],
-            "the seven techniques, in the order the bench sweeps them"
-        );
+        assert_eq!(Technique::ALL[0], Technique::Deferred, "the reference comes first (viewer key 1, the bench's first row)");
+        assert!(Technique::ALL.len() <= 9, "every technique has a viewer number key 1–9");
+        for t in Technique::ALL {
+            let d = t.description();
+            assert!(d.name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '.'), "{}: a command-line name", d.name);
+            assert!(d.summary.ends_with('.') && !d.summary.contains('\n'), "{}: a one-line summary", d.name);
+            if let Some(max) = d.max_tile {
+                assert!(max >= 1 && max <= shaders::cluster_key::MAX_TILE_SIZE, "{}: max tile {max}", d.name);
+            }
+            assert!((d.llvmpipe_lights)(32) > 0, "{}: takes lights on lavapipe", d.name);
+        }
     }
 
     #[test]

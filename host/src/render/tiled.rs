@@ -4,13 +4,35 @@
 //! more lights than the list holds is culled and shaded in several rounds on the GPU.
 //!
 //! Memory: one word per tile (its light count, for statistics and `--stats`).
-use super::technique::{FrameInputs, LightingTechnique, ListStats};
+use super::technique::{boxed, Description, FrameInputs, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, Recorder, VkResult};
 use anyhow::{bail, Result};
 use shaders::layout::{FrameParams, TiledParams};
 use shaders::tile_cull::{MAX_TILED_TILE, MODE_TILED, MODE_TILED_25D};
 use shaders::tiled::max_lights_llvmpipe;
+
+pub const TILED: Description = Description {
+    name: "tiled",
+    summary: "Tiled deferred (Olsson & Assarsson 2011; Harada et al. 2012): per screen tile, depth bounds, frustum culling into a workgroup-memory list, shading in the same dispatch.",
+    create: |gpu, f| boxed(Tiled::plain(gpu, f)),
+    // The lists live in workgroup memory during one dispatch: nothing is left for a later pass.
+    transparent: TransparentDraws::Refused,
+    gbuffer: true,
+    cost: LightCost::Culled,
+    max_tile: Some(MAX_TILED_TILE),
+    llvmpipe_lights: max_lights_llvmpipe,
+    knobs: &[],
+    own_kernels: &[],
+    own_raster: &[],
+};
+
+pub const TILED_25D: Description = Description {
+    name: "tiled-2.5d",
+    summary: "`tiled` plus Harada's 2.5D culling: a 32-cell depth mask per tile against each light's.",
+    create: |gpu, f| boxed(Tiled::depth_mask(gpu, f)),
+    ..TILED
+};
 
 pub struct Tiled {
     params: TiledParams,

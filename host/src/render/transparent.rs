@@ -102,10 +102,12 @@ pub fn refusal(t: Technique, transparent: &[Draw], names: &[String], materials: 
             format!("{name} (opacity {})", materials.get(m as usize).map_or(1.0, |x| x.opacity))
         })
         .collect();
+    let drawn: Vec<&str> = Technique::ALL.iter().filter(|t| t.draws_transparency()).map(|t| t.name()).collect();
     format!(
-        "{} has no transparent pass and would draw the scene's transparent materials opaque: {}; use deferred, clustered-naive, clustered-bvh, clustered-aabb or forward-plus",
+        "{} has no transparent pass and would draw the scene's transparent materials opaque: {}; use {}",
         t.name(),
-        listed.join(", ")
+        listed.join(", "),
+        drawn.join(", ")
     )
 }
 

@@ -17,7 +17,7 @@ pub enum Key {
     Ctrl,
     Shift,
     Tab,
-    /// `1`–`7`: a technique by its number.
+    /// `1`–`9`: a technique by its number in the registry (`render::Technique::ALL`).
     Digit(u8),
     Plus,
     Minus,
@@ -31,7 +31,7 @@ pub enum Key {
 }
 
 /// Key names as scripts write them (case-insensitive), with the key.
-pub const KEY_NAMES: [(&str, Key); 25] = [
+pub const KEY_NAMES: [(&str, Key); 27] = [
     ("w", Key::W),
     ("a", Key::A),
     ("s", Key::S),
@@ -48,6 +48,8 @@ pub const KEY_NAMES: [(&str, Key); 25] = [
     ("5", Key::Digit(5)),
     ("6", Key::Digit(6)),
     ("7", Key::Digit(7)),
+    ("8", Key::Digit(8)),
+    ("9", Key::Digit(9)),
     ("plus", Key::Plus),
     ("minus", Key::Minus),
     ("h", Key::H),
@@ -80,7 +82,8 @@ pub enum Button {
 pub enum Action {
     /// Tab: the next technique.
     NextTechnique,
-    /// `1`–`7`: technique `i` (0-based) of `Technique::ALL`.
+    /// `1`–`9`: technique `i` (0-based) of `Technique::ALL` (a number past the registry's
+    /// techniques does nothing).
     Technique(usize),
     /// `+` / `-`: twice / half the lights.
     MoreLights,
@@ -230,7 +233,8 @@ mod tests {
         assert_eq!(Key::named("TAB"), Some(Key::Tab));
         assert_eq!(Key::named("esc"), Some(Key::Escape));
         assert_eq!(Key::named("7"), Some(Key::Digit(7)));
-        assert_eq!(Key::named("8"), None);
+        assert_eq!(Key::named("9"), Some(Key::Digit(9)));
+        assert_eq!(Key::named("0"), None);
         assert_eq!(Action::of(Key::Digit(3)), Some(Action::Technique(2)));
         assert_eq!(Action::of(Key::W), None);
         let mut input = Input::default();

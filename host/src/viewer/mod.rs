@@ -154,6 +154,8 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::Digit5 => Key::Digit(5),
         KeyCode::Digit6 => Key::Digit(6),
         KeyCode::Digit7 => Key::Digit(7),
+        KeyCode::Digit8 => Key::Digit(8),
+        KeyCode::Digit9 => Key::Digit(9),
         KeyCode::Equal | KeyCode::NumpadAdd => Key::Plus,
         KeyCode::Minus | KeyCode::NumpadSubtract => Key::Minus,
         KeyCode::KeyH => Key::H,

@@ -14,7 +14,7 @@
 //! | `resize W H` | ask the window for `W × H` physical pixels; the script waits until it has them |
 //! | `shot FILE.png` | write the frame (without the overlay) as PNG, and `FILE.json` beside it: the stats of `render --stats` and the viewer's state (camera bookmark, animation time, overlay text) |
 //!
-//! Keys: `W A S D Q E Ctrl Shift Tab 1`…`7` `Plus Minus H V C Space F1 F12 Escape`
+//! Keys: `W A S D Q E Ctrl Shift Tab 1`…`9` `Plus Minus H V C Space F1 F12 Escape`
 //! (case-insensitive). E.g. `0 key Space` (pause the lights), `10 down W`, `40 up W`,
 //! `41 shot a.png`, `42 key Tab`, `50 shot b.png`, `60 key Escape`.
 use super::controls::{Button, Key};
@@ -68,7 +68,7 @@ impl Script {
                 }
                 Ok(())
             };
-            let key = |name: &str| Key::named(name).with_context(|| format!("line {n}: unknown key {name:?} (W A S D Q E Ctrl Shift Tab 1-7 Plus Minus H V C Space F1 F12 Escape)"));
+            let key = |name: &str| Key::named(name).with_context(|| format!("line {n}: unknown key {name:?} (W A S D Q E Ctrl Shift Tab 1-9 Plus Minus H V C Space F1 F12 Escape)"));
             let button = |name: &str| match name.to_ascii_lowercase().as_str() {
                 "right" => Ok(Button::Right),
                 "left" => Ok(Button::Left),

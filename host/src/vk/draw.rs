@@ -81,6 +81,12 @@ impl Recorder<'_> {
     /// Begins dynamic rendering into `colours` and `depth` over their whole extent (viewport and
     /// scissor set to it) with `indices` as the index buffer of the draws.
     pub fn begin_rendering(&mut self, colours: &[Attachment<'_>], depth: Attachment<'_>, indices: &Buffer) {
+        self.begin_drawing(colours, depth);
+        unsafe { self.ctx.device.cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32) };
+    }
+
+    /// As [`Recorder::begin_rendering`] for draws without indices ([`Recorder::draw`]).
+    pub fn begin_drawing(&mut self, colours: &[Attachment<'_>], depth: Attachment<'_>) {
         let attachment = |a: &Attachment<'_>, layout: vk::ImageLayout| {
             let (load, clear) = match a.load {
                 Load::ClearU32(v) => (vk::AttachmentLoadOp::CLEAR, vk::ClearValue { color: vk::ClearColorValue { uint32: v } }),
@@ -106,7 +112,6 @@ impl Recorder<'_> {
             d.cmd_begin_rendering(self.cmd, &info);
             d.cmd_set_viewport(self.cmd, 0, &[viewport]);
             d.cmd_set_scissor(self.cmd, 0, &[area]);
-            d.cmd_bind_index_buffer(self.cmd, indices.raw, 0, vk::IndexType::UINT32);
         }
         self.bound_graphics = vk::Pipeline::null();
         self.mark_raster();
@@ -117,6 +122,14 @@ impl Recorder<'_> {
     pub fn draw_indexed<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, first_index: u32, index_count: u32) -> VkResult<()> {
         self.bind_draw(pipe, bindings, params)?;
         unsafe { self.ctx.device.cmd_draw_indexed(self.cmd, index_count, 1, first_index, 0, 0) };
+        Ok(())
+    }
+
+    /// Draws vertices `0..vertex_count` without indices (the vertex shader makes each vertex
+    /// from its index), as [`Recorder::draw_indexed`] otherwise.
+    pub fn draw<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, vertex_count: u32) -> VkResult<()> {
+        self.bind_draw(pipe, bindings, params)?;
+        unsafe { self.ctx.device.cmd_draw(self.cmd, vertex_count, 1, 0, 0) };
         Ok(())
     }
 

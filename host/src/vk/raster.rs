@@ -61,6 +61,9 @@ pub enum DepthTest {
     /// Pass fragments nearer than the stored depth (transparent surfaces in front of the opaque
     /// ones); no writes.
     NearerReadOnly,
+    /// Every fragment passes; no writes (draws of something other than surfaces, e.g. light
+    /// bounds into a one-pixel-per-tile target).
+    Off,
 }
 
 /// How a colour target combines a fragment's output with what it holds.
@@ -138,8 +141,12 @@ impl<P> GraphicsPipeline<P> {
             DepthTest::NearestWrites => (vk::CompareOp::GREATER, true),
             DepthTest::EqualReadOnly => (vk::CompareOp::EQUAL, false),
             DepthTest::NearerReadOnly => (vk::CompareOp::GREATER, false),
+            DepthTest::Off => (vk::CompareOp::ALWAYS, false),
         };
-        let depth_state = vk::PipelineDepthStencilStateCreateInfo::default().depth_test_enable(true).depth_write_enable(write).depth_compare_op(compare);
+        let depth_state = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(depth != DepthTest::Off)
+            .depth_write_enable(write)
+            .depth_compare_op(compare);
         let blend: Vec<_> = colours
             .iter()
             .map(|&(_, b)| {
