@@ -228,16 +228,11 @@ impl Gpu {
     }
 
     /// The light-type variants (`shaders::light_types::light_type_variant`) of the light-typed
-    /// pipelines created so far ([`LightCompute`], [`LightRaster`]; the transparent pass keeps
-    /// its own): a scene of point lights creates only variant 0.
+    /// pipelines created so far ([`LightCompute`], [`LightRaster`], here or by a technique or
+    /// pass from [`Gpu::light_compute`] / [`Gpu::light_graphics`]): the variants whose frozen
+    /// module a pipeline asked for. A scene of point lights creates only variant 0.
     pub fn light_type_variants(&self) -> std::collections::BTreeSet<usize> {
-        let k = &self.kernels;
-        let frame = [&k.shade_clustered[..], &k.shade_clustered_tiles, &k.shade_deferred, &k.shade_aabb].into_iter().flatten().map(LightTyped::created);
-        let tiled = [&k.shade_tiled, &k.forward_plus_cull, &k.forward_plus_cull_widened].into_iter().flatten().map(LightTyped::created);
-        let single = [k.cluster_light_counts.created(), k.cluster_light_fill.created(), k.aabb_assign.created()];
-        let bvh = [k.assign_lights_bvh.created()];
-        let raster = self.raster.forward_shade.iter().flatten().map(LightTyped::created);
-        frame.chain(tiled).chain(single).chain(bvh).chain(raster).flatten().collect()
+        self.light_compute.created().chain(self.light_graphics.created()).collect()
     }
 
     /// Records with `f`, submits, waits. With a profiler, its passes are timed.

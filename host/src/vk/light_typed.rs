@@ -28,6 +28,11 @@ impl LightTypedModules {
         Arc::new(Self { ctx: ctx.clone(), name, spirv, modules: std::array::from_fn(|_| OnceLock::new()) })
     }
 
+    /// The light-type variants (`light_type_variant`) whose module a pipeline asked for so far.
+    pub fn created(&self) -> impl Iterator<Item = usize> + '_ {
+        self.modules.iter().enumerate().filter(|(_, m)| m.get().is_some()).map(|(v, _)| v)
+    }
+
     /// The module for the light-type bits of `effects`.
     fn module(&self, effects: u32) -> VkResult<&ShaderModule> {
         let cell = &self.modules[light_type_variant(effects)];
@@ -61,11 +66,6 @@ impl<T> LightTyped<T> {
         }
         let made = (self.make)(self.modules.module(effects)?)?;
         Ok(cell.get_or_init(|| made))
-    }
-
-    /// The variants (`light_types::light_type_variant`) created so far.
-    pub fn created(&self) -> Vec<usize> {
-        (0..LIGHT_TYPE_VARIANTS).filter(|&v| self.variants[v].get().is_some()).collect()
     }
 }
 
