@@ -138,3 +138,49 @@ fn inverse_square_cut_reaches_every_diffuse_technique() {
 fn inverse_square_cut_reaches_every_specular_technique() {
     assert_cut_reaches_every_technique(&common::gpu(), 0.5);
 }
+
+/// The accuracy study's culling knobs strictly change `clustered-naive`'s lists on lights chosen
+/// for it: from 4000 candidate lights of 1.5 m, the CPU picks (with the kernels' own tests over
+/// the frame's unique clusters) lights that the frustum planes cull from a cluster whose box keeps
+/// them, and lights that the exact test culls from a cluster whose planes keep them (spheres by
+/// an edge or a corner). Rendered alone, those lights must give strictly fewer references with
+/// `EFFECT_CULL_PLANES` than with the box, and strictly fewer with `EFFECT_CULL_EXACT` than with
+/// the planes; the images stay within 1/255 of each other (every test is conservative).
+#[test]
+fn culling_tests_strictly_narrow_the_lists() {
+    use shaders::cluster_bounds::cluster_aabb_of_key;
+    use shaders::cluster_test::{cluster_frustum, sphere_meets_frustum, sphere_outside_planes};
+    use shaders::layout::{EFFECT_CULL_EXACT, EFFECT_CULL_PLANES};
+    use shaders::lighting::sphere_intersects_aabb;
+    let gpu = common::gpu();
+    let scene = city(0.0);
+    let candidates: Vec<PointLight> = lights::uniform(&scene, 4000, 57).unwrap().into_iter().map(|l| PointLight { radius: 1.5, ..l }).collect();
+    let s = settings(Technique::ClusteredNaive, true);
+    let rb = frame(&gpu, &scene, &candidates, 0, &s).readback.unwrap();
+    let g = &rb.grid;
+    // Per candidate: clusters whose box, planes and exact test keep it.
+    let kept = |l: &PointLight| -> [usize; 3] {
+        let c = glam::Vec3::from_array(l.position);
+        let mut n = [0; 3];
+        for &key in &rb.unique {
+            let (i, j, k) = g.unpack(key);
+            let f = cluster_frustum(g, &rb.bounds, i, j, k);
+            n[0] += usize::from(sphere_intersects_aabb(c, l.radius, &cluster_aabb_of_key(g, &rb.bounds, key)));
+            n[1] += usize::from(!sphere_outside_planes(&f, c, l.radius));
+            n[2] += usize::from(sphere_meets_frustum(&f, c, l.radius));
+        }
+        n
+    };
+    let counts: Vec<[usize; 3]> = rb.lights_view.iter().map(kept).collect();
+    let planes_cull: Vec<usize> = (0..counts.len()).filter(|&l| counts[l][1] < counts[l][0]).take(40).collect();
+    let exact_cull: Vec<usize> = (0..counts.len()).filter(|&l| counts[l][2] < counts[l][1]).take(40).collect();
+    assert!(!planes_cull.is_empty() && !exact_cull.is_empty(), "the candidates hold lights each finer test culls: {} and {}", planes_cull.len(), exact_cull.len());
+    let chosen: Vec<PointLight> = planes_cull.iter().chain(&exact_cull).map(|&l| candidates[l]).collect();
+    let [aabb, planes, exact] = [0, EFFECT_CULL_PLANES, EFFECT_CULL_EXACT].map(|e| frame(&gpu, &scene, &chosen, e, &settings(Technique::ClusteredNaive, false)));
+    assert!(planes.light_refs < aabb.light_refs, "EFFECT_CULL_PLANES must cull lights the box keeps: {} references against {}", planes.light_refs, aabb.light_refs);
+    assert!(exact.light_refs < planes.light_refs, "EFFECT_CULL_EXACT must cull lights the planes keep: {} references against {}", exact.light_refs, planes.light_refs);
+    for (what, f) in [("planes", &planes), ("exact", &exact)] {
+        assert!(differing(&f.pixels, &aabb.pixels) == 0, "{what}: the image must not change (the tests are conservative)");
+    }
+    common::assert_clean(&gpu);
+}
