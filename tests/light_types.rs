@@ -104,9 +104,8 @@ fn scenes_create_only_the_light_type_pipelines_they_call_for() {
     let gpu = common::gpu();
     let base = city();
     let l = lights::uniform(&base, 200, 9).unwrap();
-    let techniques = [Technique::Deferred, Technique::ClusteredNaive, Technique::ClusteredBvh, Technique::ClusteredAabb, Technique::Tiled, Technique::ForwardPlus];
     let render_all = |scene: &Scene| {
-        for t in techniques {
+        for &t in Technique::ALL {
             frame(&gpu, scene, &scene.lights, &settings(t));
         }
     };
@@ -132,3 +131,46 @@ fn scenes_create_only_the_light_type_pipelines_they_call_for() {
     common::assert_clean(&gpu);
 }
 
+
+/// Cone culling strictly shortens every culling technique's lists on a scene built for it: spot
+/// lights a metre above the avenue pointing straight up (30° cones, 8 m range). Their range
+/// spheres reach the street and the façades around them, their cones only the sky, so every
+/// technique that culls by cone (all but brute force) must list them in fewer tiles or clusters
+/// than with range-sphere culling (`EFFECT_CULL_SPHERE_ONLY`, the bench's `--spot-culling
+/// sphere`), and both images equal brute force.
+#[test]
+fn cone_culling_strictly_shortens_every_techniques_lists() {
+    use host::render::LightCost;
+    use host::scene::flatten::{flatten, scene_input};
+    use shaders::light_types::EFFECT_CULL_SPHERE_ONLY;
+    let gpu = common::gpu();
+    let mut scene = city();
+    let (_, fwd, right, _) = camera_frame(&scene);
+    let ahead = ground_point(&scene, 0.2);
+    scene.lights.clear();
+    scene.spots.clear();
+    scene.add_lights((0..24).map(|k| {
+        let at = ahead + fwd * (3.0 * (k / 2) as f32 - 15.0) + right * if k % 2 == 0 { 1.5 } else { -1.5 } + Vec3::Y;
+        spot(at, 8.0, 2.0, Vec3::Y, 20.0, 30.0)
+    }));
+    let render = |t: Technique, fp_lists, effects: u32| {
+        let s = Settings { fp_lists, ..settings(t) };
+        let flat = flatten(&scene, s.normal_precision).unwrap();
+        let mut input = scene_input(&scene, &flat, &scene.lights);
+        input.effects |= effects;
+        host::render::render(&gpu, &input, &s).unwrap_or_else(|e| panic!("{t:?}: {e:#}"))
+    };
+    let reference = render(Technique::Deferred, Default::default(), 0).pixels;
+    let culling: Vec<Technique> = Technique::ALL.iter().copied().filter(|t| t.description().cost != LightCost::EveryLightPerPixel).collect();
+    for (t, fp_lists) in common::render::runs(&culling) {
+        let what = common::render::label((t, fp_lists));
+        let (cone, sphere) = (render(t, fp_lists, 0), render(t, fp_lists, EFFECT_CULL_SPHERE_ONLY));
+        assert!(cone.light_refs > 0, "{what}: the spheres reach the street ({} references)", cone.light_refs);
+        assert!(sphere.light_refs > cone.light_refs, "{what}: sphere-only culling lists {} light references, cone culling {}: the cone must cull", sphere.light_refs, cone.light_refs);
+        for (how, f) in [("cone", &cone), ("sphere", &sphere)] {
+            let worst = worst_channel(&reference, &f.pixels);
+            assert!(worst <= TOLERANCE, "{what}, {how} culling: differs from deferred by {worst}/255");
+        }
+    }
+    common::assert_clean(&gpu);
+}

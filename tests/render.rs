@@ -276,17 +276,28 @@ fn transparent_pass_only_where_the_scene_has_transparency() {
     common::assert_clean(&gpu);
 }
 
-/// Techniques without the transparent pass refuse scenes with transparent materials, naming
-/// themselves and the materials, instead of drawing them opaque.
+/// Every registered technique either draws a transparent scene's transparent meshes or refuses
+/// the scene: one that draws records a transparent pass whose fragments cover the panes (the
+/// frame differs from the scene without them on the panes' pixels), one that refuses names itself
+/// and the materials in one line instead of drawing them opaque or leaving them out.
 #[test]
 fn techniques_without_a_transparent_pass_refuse_transparent_scenes() {
     let gpu = common::gpu();
     let glass = Scene::load("glass", &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+    let mut bare = glass.clone();
+    let transparent: Vec<bool> = bare.materials.iter().map(|m| m.is_transparent()).collect();
+    for m in bare.meshes.iter_mut().filter(|m| transparent[m.material as usize]) {
+        m.indices.clear();
+    }
     let l = lights::uniform(&glass, 50, 3).unwrap();
     for &t in Technique::ALL {
         let s = settings(32, 18, t);
         if t.draws_transparency() {
-            frame(&gpu, &glass, &l, &s);
+            let f = frame(&gpu, &glass, &l, &s);
+            let fragments = f.transparency.map_or(0, |tr| tr.fragments);
+            assert!(fragments > 0, "{t:?}: draws transparency but its frame drew no transparent fragment");
+            let without = frame(&gpu, &bare, &l, &s);
+            assert!(worst_channel(&f.pixels, &without.pixels) > 8, "{t:?}: the panes do not show in the frame");
             continue;
         }
         let err = render_error(&gpu, &glass, &l, Precision::Oct16, &s);
