@@ -95,6 +95,7 @@ techniques! {
     Tiled25d => tiled::TILED_25D,
     ClusteredAabb => clustered_aabb::CLUSTERED_AABB,
     ForwardPlus => forward_plus::FORWARD_PLUS,
+    [raster_tiled] RasterTiled => raster_tiled::RASTER_TILED,
 }
 
 impl Technique {
