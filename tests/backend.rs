@@ -92,3 +92,25 @@ fn device_selection_by_name_and_clear_errors() {
     common::assert_clean(&again);
     common::assert_clean(&gpu);
 }
+
+/// A storage buffer larger than one binding addresses (`maxStorageBufferRange`, kept below 2^31
+/// bytes) is refused with a one-line error naming it and both sizes, before any allocation; one
+/// of exactly the range is made. Staging buffers (no storage use) are not bound, so not limited.
+#[test]
+fn storage_buffers_past_one_binding_are_refused() {
+    let gpu = common::gpu();
+    let range = gpu.ctx.info.max_storage_buffer_range as u64 & !3;
+    assert!(range < 1 << 31, "bindings stay below 2 GiB: {range}");
+    let at = Buffer::storage(&gpu.ctx, "at the range", range).unwrap();
+    assert_eq!(at.size, range);
+    drop(at);
+    match Buffer::storage(&gpu.ctx, "past the range", range + 4) {
+        Err(e @ VkError::TooLarge { .. }) => {
+            let text = e.to_string();
+            assert!(text.contains("past the range") && text.contains(&range.to_string()) && !text.contains('\n'), "{text}");
+        }
+        Err(e) => panic!("expected TooLarge, got {e}"),
+        Ok(_) => panic!("a storage buffer of {} bytes was made past the {range}-byte range", range + 4),
+    }
+    common::assert_clean(&gpu);
+}

@@ -89,7 +89,12 @@ pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u
     let range = info.max_storage_buffer_range as u64;
     let mut limits = vec![
         (MAX_LIGHTS as u64, "the renderer's limit (2 GiB of lights)".to_string()),
-        (range / std::mem::size_of::<PointLight>() as u64, format!("32-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange)", info.name, mib(range))),
+        (range / std::mem::size_of::<PointLight>() as u64, format!(
+            "32-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange {}, kept below 2 GiB)",
+            info.name,
+            mib(range),
+            mib(info.reported_storage_buffer_range as u64)
+        )),
     ];
     if is_llvmpipe(info) {
         let n = (technique.description().llvmpipe_lights)(tile_size.max(1));
@@ -130,7 +135,8 @@ mod tests {
             timestamps_across_queues: false,
             calibrated_timestamps_ext: false,
             max_shared_memory_bytes: 48 << 10,
-            max_storage_buffer_range: range,
+            max_storage_buffer_range: crate::vk::device::usable_storage_range(range),
+            reported_storage_buffer_range: range,
             max_image_dimension_2d: image,
             device_local_bytes: heap,
             max_workgroup_invocations: 1024,
@@ -169,8 +175,17 @@ mod tests {
 
     #[test]
     fn light_limits_follow_the_device_and_the_technique() {
-        let gpu = device("NVIDIA", u32::MAX, 32768, 80 << 30);
-        assert_eq!(max_lights(&gpu, Technique::Tiled, 32).0, MAX_LIGHTS as u64, "no loop limit on a GPU");
+        // A GPU reporting 4 GiB or exactly 2 GiB per binding: no loop limit, and the binding bound
+        // (below 2^31 bytes: 2^26 lights of 32 B rendered a black frame on an H200) takes one
+        // light off the renderer's 2^26, refused in one line before anything is allocated.
+        for reported in [u32::MAX, 1 << 31] {
+            let gpu = device("NVIDIA", reported, 32768, 80 << 30);
+            let (n, why) = max_lights(&gpu, Technique::Tiled, 32);
+            assert_eq!(n, MAX_LIGHTS as u64 - 1, "{why}");
+            check_lights(&gpu, Technique::ClusteredBvh, 32, n, "--lights 67108863").unwrap();
+            let e = err(check_lights(&gpu, Technique::ClusteredBvh, 32, MAX_LIGHTS as u64, "--lights 67108864"));
+            assert!(e.starts_with("--lights 67108864: 67108864 lights, but clustered-bvh takes at most 67108863 here (32-byte lights in one buffer") && !e.contains('\n'), "{e}");
+        }
         let lavapipe = device("llvmpipe", 128 << 20, 16384, 1 << 30);
         assert_eq!(max_lights(&lavapipe, Technique::ClusteredBvh, 32).0, 400_000);
         assert_eq!(max_lights(&lavapipe, Technique::Tiled, 32).0, 100_000);

@@ -38,7 +38,11 @@ pub struct DeviceInfo {
     /// The device advertises `VK_EXT_calibrated_timestamps` (its time domains are then queried).
     pub calibrated_timestamps_ext: bool,
     pub max_shared_memory_bytes: u32,
+    /// The largest storage-buffer binding the kernels may use: `maxStorageBufferRange`, below
+    /// [`MAX_BINDING_BYTES`] ([`usable_storage_range`]).
     pub max_storage_buffer_range: u32,
+    /// `maxStorageBufferRange` as the device reports it.
+    pub reported_storage_buffer_range: u32,
     /// Largest width or height of a 2D image (`maxImageDimension2D`; lavapipe: 16384).
     pub max_image_dimension_2d: u32,
     /// Size of the largest device-local memory heap, bytes (what one frame's buffers share).
@@ -50,6 +54,19 @@ pub struct DeviceInfo {
     /// The driver reports what it compiled each kernel to (`VK_KHR_pipeline_executable_properties`:
     /// registers, sizes; `vk::kernel_stats`).
     pub kernel_statistics: bool,
+}
+
+/// Bytes a storage-buffer binding stays below on every device: `2^31 − 1`. On an NVIDIA H200
+/// (driver 580.159.04) the shaders read a binding of exactly 2^31 bytes as holding nothing: 2^26
+/// lights of 32 bytes rendered a black frame, 2^26 − 1 a lit one (`docs/results/h200/
+/// light-buffer-boundary/`), so byte sizes are kept within a signed 32-bit range whatever the
+/// device reports.
+pub const MAX_BINDING_BYTES: u32 = i32::MAX as u32;
+
+/// The storage-buffer range the renderer uses on a device reporting `maxStorageBufferRange =
+/// reported` ([`MAX_BINDING_BYTES`]).
+pub fn usable_storage_range(reported: u32) -> u32 {
+    reported.min(MAX_BINDING_BYTES)
 }
 
 impl DeviceInfo {
@@ -73,7 +90,7 @@ impl DeviceInfo {
     /// One line naming the device, e.g. for the CLI's stderr and the notes.
     pub fn line(&self) -> String {
         format!(
-            "{} ({}; driver {} {}; Vulkan {}; subgroup {} [{}..{}]; shared memory {} KiB)",
+            "{} ({}; driver {} {}; Vulkan {}; subgroup {} [{}..{}]; shared memory {} KiB; storage binding {} MiB)",
             self.name,
             self.kind,
             self.driver_name,
@@ -82,7 +99,8 @@ impl DeviceInfo {
             self.subgroup_size,
             self.min_subgroup_size,
             self.max_subgroup_size,
-            self.max_shared_memory_bytes / 1024
+            self.max_shared_memory_bytes / 1024,
+            self.max_storage_buffer_range / (1 << 20)
         )
     }
 }
@@ -166,7 +184,8 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         timestamps_across_queues: false,
         calibrated_timestamps_ext,
         max_shared_memory_bytes: p.limits.max_compute_shared_memory_size,
-        max_storage_buffer_range: p.limits.max_storage_buffer_range,
+        max_storage_buffer_range: usable_storage_range(p.limits.max_storage_buffer_range),
+        reported_storage_buffer_range: p.limits.max_storage_buffer_range,
         max_image_dimension_2d: p.limits.max_image_dimension2_d,
         device_local_bytes,
         max_workgroup_invocations: p.limits.max_compute_work_group_invocations,
@@ -306,4 +325,17 @@ pub fn create(instance: &ash::Instance, pd: vk::PhysicalDevice, info: &DeviceInf
         .enabled_extension_names(&exts)
         .push_next(&mut f2);
     unsafe { instance.create_device(pd, &create, None) }.call("vkCreateDevice")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bindings_stay_below_two_gibibytes() {
+        assert_eq!(usable_storage_range(u32::MAX), (1 << 31) - 1);
+        assert_eq!(usable_storage_range(1 << 31), (1 << 31) - 1, "a binding of exactly 2^31 bytes reads as empty on an H200");
+        assert_eq!(usable_storage_range(128 << 20), 128 << 20, "lavapipe's 128 MiB stays");
+        assert!((1u64 << 26) * 32 > MAX_BINDING_BYTES as u64 && ((1u64 << 26) - 1) * 32 <= MAX_BINDING_BYTES as u64);
+    }
 }

@@ -34,9 +34,13 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    /// A buffer of at least `size` bytes.
+    /// A buffer of at least `size` bytes. A storage buffer (bound whole by every kernel) larger
+    /// than one binding can address ([`check_range`]) is refused before anything is allocated.
     pub fn new(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Self> {
         let size = size.max(MIN_BUFFER_BYTES).next_multiple_of(4);
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) {
+            check_range(ctx, name, size)?;
+        }
         let d = &ctx.device;
         // With an async-compute queue, buffers are shared by both families (CONCURRENT), so work
         // on either queue can use them without ownership transfers; semaphores order the access.
