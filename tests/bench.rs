@@ -45,8 +45,9 @@ fn tiny_bench_writes_csv_plots_and_markdown() {
     let expected: BTreeSet<(String, u64)> =
         Technique::value_variants().iter().flat_map(|&t| [(technique_name(t), 100), (technique_name(t), 1000)]).collect();
     assert_eq!(configs.keys().cloned().collect::<BTreeSet<_>>(), expected, "configurations in the CSV");
-    // Each pass row names its queue and kind: the raster passes are the G-buffer (Forward+: its
-    // depth pre-pass and forward pass), and with an async-compute queue the light sort and BVH
+    // Each pass row names its queue and kind: the raster passes are the G-buffer where the
+    // technique draws one and the passes its description names (Forward+: its depth pre-pass and
+    // forward pass; raster-tiled: its light quads), and with an async-compute queue the light sort and BVH
     // build of clustered-bvh run there. "frame" spans both queues, first to last timestamp, so
     // in every timed frame each pass lies within it (and the medians keep that order); "compute"
     // is the frame without the raster passes.
@@ -55,7 +56,8 @@ fn tiny_bench_writes_csv_plots_and_markdown() {
         let passes: Vec<(&String, &common::csv::Row)> = stages.iter().filter(|(_, r)| r.get("kind") != KIND_SPAN).collect();
         assert!(!passes.is_empty(), "{name} {lights}: no pass rows");
         let raster: BTreeSet<&str> = passes.iter().filter(|(_, r)| r.get("kind") == KIND_RASTER).map(|(s, _)| s.as_str()).collect();
-        let expected_raster: BTreeSet<&str> = if name == "forward-plus" { ["depth pre-pass", "shading"].into() } else { ["gbuffer"].into() };
+        let d = Technique::from_str(name, false).unwrap().description();
+        let expected_raster: BTreeSet<&str> = d.raster_passes.iter().copied().chain(d.gbuffer.then_some("gbuffer")).collect();
         assert_eq!(raster, expected_raster, "{name} {lights}: raster passes");
         let on_async: BTreeSet<&str> = passes.iter().filter(|(_, r)| r.get("queue") == QUEUE_ASYNC).map(|(s, _)| s.as_str()).collect();
         let expected_async: BTreeSet<&str> =

@@ -70,6 +70,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     create: |gpu, f| boxed(Clustered::naive(gpu, f)),
     transparent: TransparentDraws::Drawn,
     gbuffer: true,
+    raster_passes: &[],
     cost: LightCost::EveryLightPerCluster,
     max_tile: None,
     llvmpipe_lights: llvmpipe_chunked_lights,

@@ -28,6 +28,7 @@ pub const CLUSTERED_AABB: Description = Description {
     create: |gpu, f| boxed(ClusteredAabb::new(gpu, f)),
     transparent: TransparentDraws::Drawn,
     gbuffer: true,
+    raster_passes: &[],
     cost: LightCost::EveryLightPerCluster,
     max_tile: None,
     llvmpipe_lights: llvmpipe_chunked_lights,

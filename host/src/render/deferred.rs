@@ -14,6 +14,7 @@ pub const DEFERRED: Description = Description {
     create: |gpu, f| boxed(Deferred::new(gpu, f)),
     transparent: TransparentDraws::Drawn,
     gbuffer: true,
+    raster_passes: &[],
     cost: LightCost::EveryLightPerPixel,
     max_tile: None,
     llvmpipe_lights: llvmpipe_chunked_lights,

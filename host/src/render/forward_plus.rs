@@ -112,6 +112,7 @@ pub const FORWARD_PLUS: Description = Description {
     create: |gpu, f| boxed(ForwardPlus::new(gpu, f)),
     transparent: TransparentDraws::Drawn,
     gbuffer: false,
+    raster_passes: &["depth pre-pass", "shading"],
     cost: LightCost::Culled,
     max_tile: Some(MAX_TILED_TILE),
     llvmpipe_lights: |_| MAX_LIGHTS_LLVMPIPE,

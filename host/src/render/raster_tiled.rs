@@ -26,6 +26,7 @@ pub const RASTER_TILED: Description = Description {
     create: |gpu, f| boxed(RasterTiled::new(gpu, f)),
     transparent: TransparentDraws::Refused,
     gbuffer: true,
+    raster_passes: &["raster assignment"],
     cost: LightCost::Culled,
     // The depth bounds are `tiled`'s workgroup reduction: tiles of at most 32 px.
     max_tile: Some(MAX_TILED_TILE),

@@ -118,6 +118,10 @@ pub struct Description {
     /// (Forward+ rasterises its own depth pre-pass instead, and so cannot draw adaptive NURBS
     /// levels, which only the G-buffer's indirect draws take).
     pub gbuffer: bool,
+    /// Its passes (by their timing names) that rasterise, beside the G-buffer: only part of a GPU
+    /// runs raster work, so the timings report raster and compute apart (`tests/bench.rs` checks
+    /// the recorder marks exactly these and the G-buffer as raster).
+    pub raster_passes: &'static [&'static str],
     /// How its light tests grow with the frame (the bench's skip rule, `--stats`' lists).
     pub cost: LightCost,
     /// The largest `--tile-size` it takes (`None`: any the grid takes).

@@ -19,6 +19,7 @@ pub const TILED: Description = Description {
     // The lists live in workgroup memory during one dispatch: nothing is left for a later pass.
     transparent: TransparentDraws::Refused,
     gbuffer: true,
+    raster_passes: &[],
     cost: LightCost::Culled,
     max_tile: Some(MAX_TILED_TILE),
     llvmpipe_lights: max_lights_llvmpipe,
