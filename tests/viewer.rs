@@ -210,3 +210,33 @@ fn bad_viewer_input_is_a_one_line_error() {
         common::cli::assert_refused(&manylights(&args), &format!("{args:?}"), common::cli::BAD_INPUT, &[needle]);
     }
 }
+
+/// `view` honours the flags it shares with `render`: `--stats FILE` is written when the viewer
+/// exits (`--exit-after`: it exits after that many presented frames), its timings the medians of
+/// the last `--frames` frames; `--tess-level` tessellates the NURBS patches as `render` does
+/// (same levels in both statistics) and `--tess-error` gives the adaptive levels `render` gives.
+#[test]
+fn the_viewer_honours_stats_frames_exit_after_and_tessellation_flags() {
+    let dir = TempDir::new("viewer-flags");
+    let json = |name: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))).unwrap() };
+    for (name, extra) in [("level", ["--tess-level", "3"]), ("adaptive", ["--tess-error", "0.5"])] {
+        let viewed = dir.join(&format!("view-{name}.json"));
+        let viewed = viewed.to_str().unwrap();
+        view(&dir, name, &["--scene", "nurbs", "--lights", "200", "--exit-after", "4", "--frames", "3", "--stats", viewed, extra[0], extra[1]], "");
+        let v = json(&format!("view-{name}.json"));
+        assert_eq!(v["viewer"]["frame"], 4, "{name}: --exit-after 4 renders 4 frames: {}", v["viewer"]);
+        assert_eq!(v["timed_frames"], 3, "{name}: --frames 3 sets the frames the timings are medians of");
+        let rendered = dir.join(&format!("render-{name}.json"));
+        let out = dir.join(&format!("render-{name}.png"));
+        let (w, h) = (SIZE.0.to_string(), SIZE.1.to_string());
+        let r = manylights(["render", "--scene", "nurbs", "--lights", "200", "--width", &w, "--height", &h, "--out", out.to_str().unwrap(), "--stats", rendered.to_str().unwrap(), extra[0], extra[1]]);
+        assert!(r.ok, "{}", r.stderr);
+        let levels = json(&format!("render-{name}.json"))["tess_levels"].clone();
+        assert!(levels.as_array().is_some_and(|l| !l.is_empty()), "{name}: render reports the patches' levels: {levels}");
+        assert_eq!(v["tess_levels"], levels, "{name}: the viewer tessellates as render does");
+    }
+    // Without the flag the levels differ from `--tess-level 3`'s (the flag reached the viewer).
+    let plain = dir.join("view-plain.json");
+    view(&dir, "plain", &["--scene", "nurbs", "--lights", "200", "--exit-after", "2", "--stats", plain.to_str().unwrap()], "");
+    assert_ne!(json("view-plain.json")["tess_levels"], json("view-level.json")["tess_levels"], "--tess-level changed nothing");
+}

@@ -38,6 +38,9 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "tile_size": s.tile_size,
         "slices": frame.grid.num_slices,
         "lights": lights,
+        // Each NURBS patch's tessellation level in the last frame (adaptive levels as the GPU
+        // chose them; empty without patches).
+        "tess_levels": frame.tess_levels,
         "timed_frames": s.frames,
         "gpu_ms": {
             "passes": passes, "pass_queues": queues,

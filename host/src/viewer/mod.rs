@@ -32,8 +32,10 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 /// Arguments of `view`: every flag of `render` (its `--width`/`--height` size the window; `--out`
-/// names the F12 screenshots, numbered: `frame-0001.png`, …; `--frames` and `--stats` are not
-/// used) and the viewer's own.
+/// names the F12 screenshots, numbered: `frame-0001.png`, …; `--frames N`: a screenshot's and
+/// `--stats`' timings are medians of the last N frames; `--stats FILE`: the last frame's
+/// statistics, written when the viewer exits; `--tess-level` / `--tess-error` as in `render`)
+/// and the viewer's own.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
     #[command(flatten)]
@@ -89,6 +91,12 @@ pub fn run(dev: &DeviceArgs, a: &ViewArgs) -> Result<()> {
         error: None,
     };
     event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
+    if let (None, Some(path)) = (&app.error, &a.render.stats) {
+        let lines = app.overlay_lines();
+        if let Err(e) = app.viewer.write_stats(&app.gpu, path, &lines) {
+            app.error = Some(e.context(format!("--stats {}", path.display())));
+        }
+    }
     let App { overlay, presenter, window, viewer, gpu, error, .. } = app;
     // The swapchain and surface go before the window; the renderer before the device.
     drop((overlay, presenter, window, viewer));

@@ -19,7 +19,6 @@ use std::collections::VecDeque;
 use std::path::Path;
 
 /// Frames whose times a screenshot's statistics take medians over.
-const STATS_FRAMES: usize = 10;
 /// Frames between two read-backs of the light-list statistics for the overlay.
 const LISTS_EVERY: u64 = 15;
 
@@ -46,6 +45,10 @@ pub struct Viewer {
     pub text: OverlayText,
     /// Frames rendered.
     pub frames: u64,
+    /// Frames whose timings a report takes the medians of (`--frames`, at least 1).
+    stats_frames: usize,
+    /// Adaptive NURBS levels within this many pixels (`--tess-error`).
+    nurbs_tolerance: Option<f32>,
     recent: VecDeque<FrameTimes>,
     camera_moved: bool,
 }
@@ -78,6 +81,9 @@ impl Viewer {
             }
             false => scene.spot_share,
         };
+        if let Some(level) = a.tess_level {
+            scene.set_tess_level(level);
+        }
         let scene_camera = scene.camera;
         let at = a.camera.unwrap_or_else(|| Bookmark { fov_y_degrees: None, ..Bookmark::of_camera(&scene_camera) });
         scene.camera = at.apply(&scene_camera);
@@ -104,6 +110,8 @@ impl Viewer {
             paused: false,
             text: OverlayText::default(),
             frames: 0,
+            stats_frames: a.frames.max(1) as usize,
+            nurbs_tolerance: a.tess_error,
             recent: VecDeque::new(),
             camera_moved: false,
         })
@@ -120,7 +128,8 @@ impl Viewer {
         self.settings.width = width;
         self.settings.height = height;
         self.scene.camera = self.camera.at.apply(&self.scene_camera);
-        let input = scene_input(&self.scene, &self.flat, &self.lights);
+        let mut input = scene_input(&self.scene, &self.flat, &self.lights);
+        input.nurbs_tolerance = self.nurbs_tolerance;
         self.renderer = Some(Renderer::new(gpu, &input, &self.settings).context("creating the renderer")?);
         self.recent.clear();
         self.text.reset();
@@ -233,7 +242,7 @@ impl Viewer {
             self.text.lists = Some(list_summary(r)?);
         }
         self.text.add(&times);
-        if self.recent.len() == STATS_FRAMES {
+        if self.recent.len() >= self.stats_frames {
             self.recent.pop_front();
         }
         self.recent.push_back(times);
@@ -263,17 +272,30 @@ impl Viewer {
     }
 
     /// Writes the last frame as `png` (the heatmap with its legend, as `render` writes it) and
-    /// its statistics beside it (`.json`: `render --stats`'s, plus the viewer's camera, time and
-    /// `overlay` lines).
+    /// its statistics beside it (`.json`: [`Viewer::write_stats`]'s).
     pub fn screenshot(&mut self, gpu: &Gpu, png: &Path, overlay: &[String]) -> Result<()> {
-        let r = self.renderer.as_mut().context("no frame to save: nothing was rendered yet")?;
-        let times: Vec<FrameTimes> = self.recent.iter().cloned().collect();
-        let mut frame = r.report(&times, true)?;
+        let (mut frame, json) = self.report(gpu, overlay)?;
         let (w, h) = (self.settings.width, self.settings.height);
         if self.settings.view == View::Heatmap {
             render::legend::draw(&mut frame.pixels, w, h, render::HEAT_MAX);
         }
         crate::debug_frame::save_png(png, w, h, &frame.pixels)?;
+        write_json(&png.with_extension("json"), &json)
+    }
+
+    /// Writes the statistics of the last frame to `path` (`view --stats`): `render --stats`'s
+    /// over the last `--frames` frames, plus the viewer's camera, time, frame count, technique,
+    /// view and `overlay` lines.
+    pub fn write_stats(&mut self, gpu: &Gpu, path: &Path, overlay: &[String]) -> Result<()> {
+        let (_, json) = self.report(gpu, overlay)?;
+        write_json(path, &json)
+    }
+
+    /// The last frame and its statistics.
+    fn report(&mut self, gpu: &Gpu, overlay: &[String]) -> Result<(render::Frame, serde_json::Value)> {
+        let r = self.renderer.as_mut().context("no frame to report: nothing was rendered yet")?;
+        let times: Vec<FrameTimes> = self.recent.iter().cloned().collect();
+        let frame = r.report(&times, true)?;
         let settings = Settings { frames: times.len() as u32, read_back: true, ..self.settings.clone() };
         let mut json = render::stats::stats_json(&gpu.ctx.info, &self.scene.name, self.lights.len(), &settings, &frame);
         json["viewer"] = serde_json::json!({
@@ -285,10 +307,12 @@ impl Viewer {
             "view": view_name(self.settings.view),
             "overlay": overlay,
         });
-        let path = png.with_extension("json");
-        std::fs::write(&path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
-        Ok(())
+        Ok((frame, json))
     }
+}
+
+fn write_json(path: &Path, json: &serde_json::Value) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(json)?).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Clusters and lights per cluster of the last frame (the clustered techniques' longest list
