@@ -20,7 +20,8 @@
 //! ## How to add a technique
 //! (The README's "Adding a technique" has the steps with the shader side.)
 //! 1. Write `render/<name>.rs`: a `pub const` [`Description`] (name, summary, constructor,
-//!    transparency, G-buffer use, light cost, tile and lavapipe limits, knobs, own kernels), a
+//!    transparency, G-buffer use, raster passes, light cost, tile and lavapipe limits, knobs, own
+//!    kernels), a
 //!    struct with a constructor `fn(&Gpu, &FrameInputs) -> Result<Self>` (allocate, create its
 //!    pipelines, check limits) and an `impl LightingTechnique` (at least `record` and `buffers`;
 //!    `grow_if_needed`, `stats` and `record_async` where it has them). It records through
