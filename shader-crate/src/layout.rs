@@ -470,29 +470,31 @@ pub const OIT_K_NEAREST: u32 = 1;
 /// Weighted blended OIT (McGuire & Bavoil 2013): no sorting at all.
 pub const OIT_WEIGHTED: u32 = 2;
 
-/// One transparent fragment in a per-pixel linked list (Yang et al. 2010): 16 B, one 128-bit load.
+/// One transparent fragment in a per-pixel linked list (Yang et al. 2010): 20 B.
 /// ```text
-///  word 0  colour   31      24 23      16 15       8 7        0
-///                  ┌──────────┬──────────┬──────────┬──────────┐
-///                  │  A = α   │  B·α     │  G·α     │  R·α     │  packUnorm4x8 of premultiplied
-///                  └──────────┴──────────┴──────────┴──────────┘  linear RGBA (R in the low byte)
-///  word 1  depth    f32 bits of the reversed-Z depth z_buf = near/d, clamped to [0, 1]
+///  word 0  colour[0]  31             16 15              0
+///                    ┌─────────────────┬─────────────────┐
+///                    │      G·α        │      R·α        │   16-bit UNORM each: premultiplied
+///                    └─────────────────┴─────────────────┘   linear RGBA (`oit::pack_unorm4x16`)
+///  word 1  colour[1] │       α         │      B·α        │
+///                    └─────────────────┴─────────────────┘
+///  word 2  depth    f32 bits of the reversed-Z depth z_buf = near/d, clamped to [0, 1]
 ///                   (1 = near plane, 0 = infinitely far): as u32, larger = nearer
-///  word 2  next     node index of the fragment inserted before it at this pixel, or OIT_END
-///  word 3  tie      frame-unique id of the fragment's primitive: orders fragments of equal depth
+///  word 3  next     node index of the fragment inserted before it at this pixel, or OIT_END
+///  word 4  tie      frame-unique id of the fragment's primitive: orders fragments of equal depth
 /// ```
 /// The colour is premultiplied (`oit` module docs, "Why premultiplied"): tonemapped linear RGB
-/// (display-referred, before the sRGB encoding) times α, and α.
+/// (display-referred, before the sRGB encoding) times α, and α, 16 bits each ("Why 16 bits").
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
 pub struct OitNode {
-    pub colour: u32,
+    pub colour: [u32; 2],
     pub depth: u32,
     pub next: u32,
     pub tie: u32,
 }
-const _: () = assert!(core::mem::size_of::<OitNode>() == 16);
+const _: () = assert!(core::mem::size_of::<OitNode>() == 20);
 
 /// Push constants of the transparency passes (list building and resolve).
 #[repr(C)]

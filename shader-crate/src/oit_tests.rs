@@ -27,7 +27,7 @@ struct Lists {
 
 impl Lists {
     fn new(pixels: usize, capacity: u32) -> Self {
-        Self { heads: vec![OIT_END; pixels], nodes: vec![OitNode { colour: 0, depth: 0, next: 0, tie: 0 }; capacity as usize], counter: 0, capacity }
+        Self { heads: vec![OIT_END; pixels], nodes: vec![OitNode { colour: [0; 2], depth: 0, next: 0, tie: 0 }; capacity as usize], counter: 0, capacity }
     }
 
     /// Module docs, step 3: counter, exchange if the node fits, store unless it overflowed.
@@ -92,14 +92,14 @@ fn random_cases(seed: u64, count: usize, tied: usize) -> impl Iterator<Item = (u
     })
 }
 
-fn decode(colour: u32) -> [f64; 4] {
-    core::array::from_fn(|c| ((colour >> (8 * c)) & 255) as f64 / 255.0)
+fn decode(colour: NodeColour) -> [f64; 4] {
+    core::array::from_fn(|c| ((colour[c / 2] >> (16 * (c % 2))) & 0xffff) as f64 / 65535.0)
 }
 
 /// The nodes in the resolve's order, nearest first: (depth, primitive, colour) descending.
 fn nearest_first(nodes: &[OitNode]) -> Vec<OitNode> {
     let mut v = nodes.to_vec();
-    v.sort_by_key(|n| core::cmp::Reverse((n.depth, n.tie, n.colour)));
+    v.sort_by_key(|n| core::cmp::Reverse((n.depth, n.tie, n.colour[1], n.colour[0])));
     v
 }
 
@@ -161,26 +161,25 @@ const OPAQUE64: [f64; 3] = [0.2f32 as f64, 0.5f32 as f64, 0.9f32 as f64];
 
 #[test]
 fn packing_matches_glsl_rounding() {
-    let glsl = |x: f32| if x.is_nan() { 0 } else { (x.clamp(0.0, 1.0) * 255.0).round() as u32 };
+    let glsl = |x: f32| if x.is_nan() { 0 } else { (x.clamp(0.0, 1.0) * 65535.0).round() as u32 };
     let mut rng = Rng(7);
-    let mut values: Vec<f32> = vec![0.0, -0.0, 1.0, -1.0, 2.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE, 0.499_999_97 / 255.0];
-    values.extend((0..=255).flat_map(|b| [(b as f32 + 0.5) / 255.0, b as f32 / 255.0, f32::from_bits(((b as f32 + 0.5) / 255.0).to_bits() - 1)]));
+    let mut values: Vec<f32> = vec![0.0, -0.0, 1.0, -1.0, 2.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE, 0.499_999_97 / 65535.0];
+    values.extend((0..=65535).step_by(7).flat_map(|u| [(u as f32 + 0.5) / 65535.0, u as f32 / 65535.0, f32::from_bits(((u as f32 + 0.5) / 65535.0).to_bits() - 1)]));
     values.extend((0..100_000).map(|_| rng.unit() * 1.2 - 0.1));
     for &x in &values {
         let v = Vec4::new(x, 0.25, x, 1.0 - x);
-        let w = pack_unorm4x8(v);
-        let want = glsl(x) | (glsl(0.25) << 8) | (glsl(x) << 16) | (glsl(1.0 - x) << 24);
-        assert_eq!(w, want, "{x:e} ({:#x})", x.to_bits());
+        let want = [glsl(x) | (glsl(0.25) << 16), glsl(x) | (glsl(1.0 - x) << 16)];
+        assert_eq!(pack_unorm4x16(v), want, "{x:e} ({:#x})", x.to_bits());
     }
-    for b in 0..=255u32 {
-        let w = b | ((255 - b) << 8) | ((b ^ 0x5a) << 16) | (b.rotate_left(3) & 255) << 24;
-        assert_eq!(pack_unorm4x8(unpack_unorm4x8(w)), w, "byte {b}");
-        assert_eq!(unpack_unorm4x8(w).x, b as f32 / 255.0);
+    for u in (0..=65535u32).step_by(3) {
+        let w = [u | ((65535 - u) << 16), (u ^ 0x5a5a) | ((u.rotate_left(3) & 0xffff) << 16)];
+        assert_eq!(pack_unorm4x16(unpack_unorm4x16(w)), w, "word {u}");
+        assert_eq!(unpack_unorm4x16(w).x, u as f32 / 65535.0);
     }
     for _ in 0..10_000 {
         let v = Vec4::new(rng.unit(), rng.unit(), rng.unit(), rng.unit());
-        let d = (unpack_unorm4x8(pack_unorm4x8(v)) - v).abs().max_element();
-        assert!(d as f64 <= 0.5 * STEP + 1e-7, "{v}: {d}");
+        let d = (unpack_unorm4x16(pack_unorm4x16(v)) - v).abs().max_element();
+        assert!(d as f64 <= 0.5 / 65535.0 + 1e-7, "{v}: {d}");
     }
 }
 
@@ -189,9 +188,9 @@ fn premultiplied_channels_never_exceed_alpha() {
     let mut rng = Rng(8);
     for _ in 0..100_000 {
         let (rgb, a) = (Vec3::new(rng.unit() * 1.5, rng.unit(), 1.0), rng.unit());
-        let w = premultiplied_rgba8(rgb, a);
-        let alpha = w >> 24;
-        assert!((0..3).all(|c| (w >> (8 * c)) & 255 <= alpha), "{rgb} {a}: {w:#010x}");
+        let w = premultiplied_rgba16(rgb, a);
+        let alpha = w[1] >> 16;
+        assert!([w[0] & 0xffff, w[0] >> 16, w[1] & 0xffff].iter().all(|&c| c <= alpha), "{rgb} {a}: {w:08x?}");
     }
 }
 
@@ -371,7 +370,7 @@ fn weighted_resolve_of_a_list_equals_the_blended_targets() {
         let l = built(&frags, &(0..frags.len()).collect::<Vec<_>>());
         let (mut accum, mut reveal) = (Vec4::ZERO, 1.0f32);
         for n in l.list(0) {
-            let c = unpack_unorm4x8(n.colour);
+            let c = unpack_unorm4x16(n.colour);
             let f = weighted_fragment(Vec3::new(c.x, c.y, c.z) / c.w.max(1e-30), c.w, 0.1 / f32::from_bits(n.depth));
             accum += f.accum;
             reveal *= 1.0 - f.alpha;
@@ -411,8 +410,8 @@ fn overflow_is_flagged_and_the_wanted_count_is_exact() {
 fn non_finite_inputs_give_finite_output() {
     let (nan, inf) = (f32::NAN, f32::INFINITY);
     let n = insert_node(3, 0, 1, Vec3::new(nan, inf, -inf), 1.0, nan, 5).node;
-    assert_eq!((n.colour, n.depth, n.next), (0xff00_ff00, 0, 3));
-    assert_eq!(insert_node(OIT_END, 0, 1, Vec3::ONE, nan, inf, 5).node.colour, 0);
+    assert_eq!((n.colour, n.depth, n.next), ([0xffff_0000, 0xffff_0000], 0, 3));
+    assert_eq!(insert_node(OIT_END, 0, 1, Vec3::ONE, nan, inf, 5).node.colour, [0, 0]);
     assert_eq!(insert_node(OIT_END, 0, 1, Vec3::ONE, inf, inf, 5).node.depth, 1.0f32.to_bits());
     assert_eq!(insert_node(OIT_END, 0, 1, Vec3::ONE, -inf, -2.0, 5).node.depth, 0);
     let frags = [nan, inf, -inf, 0.5, 1e30, -0.0].map(|x| Frag { rgb: Vec3::splat(x), alpha: x, z_buf: x, primitive: 2 });
@@ -429,11 +428,63 @@ fn non_finite_inputs_give_finite_output() {
     // Random words, next pointers that loop back: every walk ends, every colour is finite.
     let mut rng = Rng(19);
     for _ in 0..200 {
-        let nodes: Vec<OitNode> = (0..16).map(|_| OitNode { colour: rng.next() as u32, depth: rng.next() as u32, next: rng.below(20), tie: rng.next() as u32 }).collect();
+        let nodes: Vec<OitNode> = (0..16).map(|_| OitNode { colour: [rng.next() as u32, rng.next() as u32], depth: rng.next() as u32, next: rng.below(20), tie: rng.next() as u32 }).collect();
         for variant in [OIT_EXACT, OIT_K_NEAREST, OIT_WEIGHTED] {
             let p = OitParams { capacity: 16, width: 1, height: 1, variant, k: 3, near: 0.1, _pad: [0; 2] };
             let r = resolve(&p, rng.below(16), OPAQUE, &|i: u32| nodes[i as usize]);
             assert!(r.rgb.is_finite() && r.layers <= 16, "{r:?}");
         }
     }
+}
+
+/// The closed forms of "over" (module docs, "Blend algebra") against the resolve, both encoded to
+/// sRGB as the frame is (opaque colours are decoded sRGB bytes, as the resolve reads the frame):
+/// within 1/255 over dark to bright backgrounds and pane colours for
+/// - one pane of α = ½: `D = c·α + (1 − α)·B`;
+/// - 50 and 256 coincident panes of α = 0.1 and one colour (equal depth, primitives 0…n−1):
+///   `D = c·(1 − (1 − α)^n) + B·(1 − α)^n` — every list mode, since the k-nearest tail is exact
+///   for layers of one colour;
+/// - coplanar panes of different colours and coverages (equal depth, different primitives, as
+///   panes of different meshes): the over of each in primitive order, exact mode.
+#[test]
+fn resolves_match_closed_form_composites_after_srgb() {
+    use crate::lighting::{decode_srgb8, encode_srgb8};
+    let encode = |v: [f64; 3]| encode_srgb8(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
+    let steps = |a: u32, b: u32| (0..3).map(|s| ((a >> (8 * s)) & 255).abs_diff((b >> (8 * s)) & 255)).max().unwrap();
+    let backgrounds: Vec<u32> = [0u32, 1, 3, 8, 20, 45, 90, 140, 200, 255].iter().map(|&v| v | ((255 - v) << 8) | ((v / 2) << 16) | 0xff00_0000).collect();
+    let colours = [Vec3::ZERO, Vec3::new(0.01, 0.002, 0.03), Vec3::new(0.05, 0.3, 0.8), Vec3::splat(0.5), Vec3::ONE, Vec3::new(0.9, 0.1, 0.004)];
+    let coincident = |c: Vec3, alpha: f32, n: u32| -> Vec<Frag> { (0..n).map(|p| Frag { rgb: c, alpha, z_buf: 0.5, primitive: p }).collect() };
+    let mut worst = 0;
+    for &bw in &backgrounds {
+        let b = decode_srgb8(bw);
+        let b64 = b.to_array().map(f64::from);
+        for &c in &colours {
+            let c64 = c.to_array().map(f64::from);
+            // One pane, and n coincident panes: D = c·(1 − T) + B·T, T = (1 − α)^n.
+            for (alpha, n, modes) in [(0.5f64, 1u32, &[(OIT_EXACT, 0), (OIT_K_NEAREST, 4), (OIT_K_NEAREST, 1)][..]), (0.1, 50, &[(OIT_EXACT, 0), (OIT_K_NEAREST, 4), (OIT_K_NEAREST, 1)][..]), (0.1, 256, &[(OIT_EXACT, 0)][..])] {
+                let t = (1.0 - alpha).powi(n as i32);
+                let want = encode(core::array::from_fn(|k| c64[k] * (1.0 - t) + b64[k] * t));
+                let frags = coincident(c, alpha as f32, n);
+                let l = built(&frags, &(0..frags.len()).collect::<Vec<_>>());
+                for &(variant, k) in modes {
+                    let r = l.resolve(0, variant, k, b);
+                    assert!(!r.fallback, "{n} layers resolve without falling back");
+                    let got = encode_srgb8(r.rgb);
+                    let d = steps(got, want);
+                    worst = worst.max(d);
+                    assert!(d <= 1, "{n} panes of α {alpha}, colour {c} over {b} (variant {variant}, k {k}): {got:08x} against the closed form {want:08x}");
+                }
+            }
+        }
+        // Coplanar panes of different colours and coverages: over in primitive order.
+        let panes: Vec<Frag> = (0..12).map(|p| Frag { rgb: colours[p % colours.len()], alpha: 0.05 + 0.08 * p as f32, z_buf: 0.25, primitive: 100 + p as u32 }).collect();
+        let want = panes.iter().fold(b64, |d, f| {
+            let (c, a) = (f.rgb.to_array().map(f64::from), f.alpha as f64);
+            core::array::from_fn(|k| c[k] * a + d[k] * (1.0 - a))
+        });
+        let l = built(&panes, &[5, 0, 11, 3, 8, 1, 10, 2, 7, 4, 9, 6]);
+        let got = encode_srgb8(l.resolve(0, OIT_EXACT, 0, b).rgb);
+        assert!(steps(got, encode(want)) <= 1, "coplanar panes over {b}: {got:08x} against {:08x}", encode(want));
+    }
+    println!("closed-form composites: worst {worst}/255");
 }

@@ -49,7 +49,7 @@
 //!
 //! # Memory
 //!
-//! Heads 4 B per pixel, nodes 16 B per transparent fragment ([`OitNode`]), 4 counters; the key
+//! Heads 4 B per pixel, nodes 20 B per transparent fragment ([`OitNode`]), 4 counters; the key
 //! pre-pass adds nothing (the page table's marks and slots). Weighted: 16 B (RGBA32F
 //! accumulation) + 4 B (R32F revealage) per pixel, each once as a target and once as a buffer,
 //! nothing per fragment.

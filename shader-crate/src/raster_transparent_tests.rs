@@ -118,7 +118,7 @@ fn the_insert_counts_every_fragment_and_stores_those_that_fit() {
         lights: &lights,
         materials: &materials,
     };
-    let (mut heads, mut nodes, mut counters) = (vec![OIT_END; 16], vec![OitNode { colour: 0, depth: 0, next: 0, tie: 0 }; 2], vec![0u32; OIT_COUNTERS as usize]);
+    let (mut heads, mut nodes, mut counters) = (vec![OIT_END; 16], vec![OitNode { colour: [0; 2], depth: 0, next: 0, tie: 0 }; 2], vec![0u32; OIT_COUNTERS as usize]);
     for (i, z) in [0.5f32, 0.25, 0.125].into_iter().enumerate() {
         let frag = Vec4::new(1.5, 2.5, z, 1.0);
         transparent_fragment::<true>(&p, &b, frag, Vec3::Z, true, Vec3::ONE, i as u32, &mut heads, &mut nodes, &mut counters);

@@ -110,7 +110,7 @@ pub fn oit_resolve_weighted(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::oit::{insert_node, premultiplied_rgba8};
+    use crate::oit::{insert_node, premultiplied_rgba16};
     use glam::Vec3;
 
     /// A list built by the fragment shader's steps resolves over the decoded opaque colour and
@@ -131,8 +131,8 @@ mod tests {
         let r = resolve_pixel(&p, head, opaque, &|n| nodes[n as usize]);
         // Far (red, α ½) then near (green, α ¼) over the opaque colour.
         let b = lighting::decode_srgb8(opaque);
-        let red = oit::over(premultiplied_rgba8(Vec3::X, 0.5), b);
-        let want = oit::over(premultiplied_rgba8(Vec3::Y, 0.25), red);
+        let red = oit::over(premultiplied_rgba16(Vec3::X, 0.5), b);
+        let want = oit::over(premultiplied_rgba16(Vec3::Y, 0.25), red);
         assert_eq!((r.word, r.layers, r.fallback), (lighting::encode_srgb8(want), 2, false));
     }
 

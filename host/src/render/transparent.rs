@@ -27,7 +27,7 @@
 //! The node counter is read back after the frame: past the node buffer's capacity the buffer
 //! grows to the need + 25 % and the frame re-runs (never a silent drop).
 //!
-//! Memory: heads 4 B per pixel, nodes 16 B per transparent fragment (first guess: two per pixel,
+//! Memory: heads 4 B per pixel, nodes 20 B per transparent fragment (first guess: two per pixel,
 //! within one storage-buffer range; it grows), 16 B of counters; weighted: 20 B per pixel as
 //! targets and 20 B as buffers, no lists. A scene without transparent draws allocates none of it and
 //! creates none of its pipelines.
@@ -90,6 +90,9 @@ impl OitVariant {
 /// overflow past a few dozen heavy layers, and the resolve reads plain floats.
 const WEIGHTED_TARGETS: [(TargetFormat, Blend); 2] = [(TargetFormat::Rgba32Float, Blend::Add), (TargetFormat::R32Float, Blend::Revealage)];
 
+
+/// Bytes of one node of the per-pixel lists (`shaders::layout::OitNode`: 16-bit colour channels).
+const NODE_BYTES: u64 = std::mem::size_of::<shaders::layout::OitNode>() as u64;
 /// The error of a technique without the transparent pass for a scene with transparent draws.
 pub fn refusal(t: Technique, transparent: &[Draw], names: &[String], materials: &[MaterialGpu]) -> String {
     let mut used: Vec<u32> = transparent.iter().map(|d| d.params.material).collect();
@@ -236,7 +239,7 @@ impl Transparency {
         } else {
             crate::vk::memory::check_range(ctx, "oit heads", 4 * pixels)?;
             // Two nodes per pixel, within one storage-buffer range (lavapipe: 128 MiB); more grows.
-            let fits = u32::try_from(ctx.info.max_storage_buffer_range as u64 / 16).unwrap_or(u32::MAX);
+            let fits = u32::try_from(ctx.info.max_storage_buffer_range as u64 / NODE_BYTES).unwrap_or(u32::MAX);
             let capacity = f.params.count.saturating_mul(2).clamp(1024, fits.max(1024));
             Store::Lists { heads: Buffer::filled(ctx, "oit heads", 4 * pixels, OIT_END)?, nodes: Self::node_buffer(ctx, capacity)?, capacity }
         };
@@ -261,7 +264,7 @@ impl Transparency {
     }
 
     fn node_buffer(ctx: &crate::vk::Context, capacity: u32) -> VkResult<Buffer> {
-        let bytes = 16 * capacity as u64;
+        let bytes = NODE_BYTES * capacity as u64;
         crate::vk::memory::check_range(ctx, "oit nodes", bytes)?;
         Buffer::storage(ctx, "oit nodes", bytes)
     }
