@@ -1,8 +1,10 @@
-//! Fuzzing the scene loaders — OBJ, MTL, TOML descriptions and lights — through their real entry
+//! Fuzzing the scene loaders — OBJ, MTL, TOML descriptions and lights (point, spot and directional
+//! lights with their `type`, `direction`, `inner_angle`, `outer_angle` and `spot_fraction` keys),
+//! glTF documents (JSON with data-URI or external buffers) and `.glb` containers — through their real entry
 //! point, `Scene::load` (the bytes are written to files, so `mtllib`, `map_Kd` and `geometry`
 //! references are followed as in use), and the light generators directly.
 //!
-//! Inputs: the seed corpus `tests/fuzz-corpus/{obj,mtl,toml,lights}/` (small valid files, and
+//! Inputs: the seed corpus `tests/fuzz-corpus/{obj,mtl,toml,lights,gltf,glb}/` (small valid files, and
 //! known-bad ones named `bad-*`), mutated with structure-aware mutations (numbers swapped for
 //! NaN, ∞, 1e39, 2^31, 4e9, …; format keywords and paths such as `/dev/zero` inserted; lines
 //! deleted, duplicated, swapped and spliced from other seeds; bit flips; truncation; CRLF; very
@@ -45,7 +47,7 @@ const BOUNDED_SECONDS: f64 = 20.0;
 /// A case that takes longer than this is a hang.
 const HANG_SECONDS: u64 = 60;
 /// Fuzz targets whose long-run time `MANYLIGHTS_FUZZ_SECONDS` is split between.
-const TARGETS: u32 = 5;
+const TARGETS: u32 = 7;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Kind {
@@ -53,6 +55,8 @@ enum Kind {
     Mtl,
     Toml,
     Lights,
+    Gltf,
+    Glb,
 }
 
 impl Kind {
@@ -62,6 +66,8 @@ impl Kind {
             Kind::Mtl => "mtl",
             Kind::Toml => "toml",
             Kind::Lights => "lights",
+            Kind::Gltf => "gltf",
+            Kind::Glb => "glb",
         }
     }
 
@@ -70,8 +76,12 @@ impl Kind {
             Kind::Obj => "obj",
             Kind::Mtl => "mtl",
             Kind::Toml | Kind::Lights => "toml",
+            Kind::Gltf => "gltf",
+            Kind::Glb => "glb",
         }
     }
+
+    const ALL: [Kind; 6] = [Kind::Obj, Kind::Mtl, Kind::Toml, Kind::Lights, Kind::Gltf, Kind::Glb];
 }
 
 fn corpus_dir() -> PathBuf {
@@ -100,7 +110,7 @@ impl Workspace {
         static N: AtomicU64 = AtomicU64::new(0);
         let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-{tag}-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed)));
         let _ = std::fs::remove_dir_all(&root);
-        for sub in ["obj", "mtl", "toml", "lights", "textures"] {
+        for sub in Kind::ALL.map(Kind::dir).into_iter().chain(["textures"]) {
             std::fs::create_dir_all(root.join(sub)).unwrap();
             for e in std::fs::read_dir(corpus_dir().join(sub)).unwrap() {
                 let p = e.unwrap().path();
@@ -136,6 +146,15 @@ fn names_a_place(msg: &str) -> bool {
     let line = msg.match_indices(" line ").any(|(i, _)| msg[i + 6..].starts_with(|c: char| c.is_ascii_digit()));
     let keys = ["geometry", "name", "camera", "lights", "light[", "[[light]]", "material[", "mtl_d_zero_is_opaque", "effects", "distribution", "count", "nurbs["];
     let items = ["not found", "cannot read", "mesh ", "light ", "material ", "texture ", "spans ", "triangle", "materials"];
+    // glTF: the document's own places (a buffer, view or accessor by index, a JSON path such as
+    // `accessors[0].bufferView` — the validation's `invalid glTF: <path>: <problem>` always has
+    // one —, the `.glb` container as a whole or its chunk, a JSON column).
+    let gltf = [
+        "buffer ", "view ", "accessor ", "primitive", "meshes[", "nodes[", "accessors[", "bufferViews[", "buffers[", "materials[", "textures[",
+        "images[", "samplers[", "cameras[", "scenes[", "skins[", "animations[", "extensions", ".glb container", "chunk", "column ",
+        "invalid glTF: ",
+    ];
+    let items: Vec<&str> = items.iter().chain(&gltf).copied().collect();
     line || keys.iter().chain(&items).any(|k| msg.contains(k))
 }
 
@@ -339,6 +358,16 @@ fn fuzz_lights() {
     fuzz_kind(Kind::Lights);
 }
 
+#[test]
+fn fuzz_gltf() {
+    fuzz_kind(Kind::Gltf);
+}
+
+#[test]
+fn fuzz_glb() {
+    fuzz_kind(Kind::Glb);
+}
+
 /// Floats that break generators, and ordinary ones.
 fn any_float() -> impl Strategy<Value = f32> {
     prop_oneof![
@@ -393,7 +422,7 @@ fn fuzz_light_generators() {
 fn corpus_files_load_or_are_refused_as_named() {
     let ws = Workspace::new("corpus");
     let mut counts = (0, 0);
-    for kind in [Kind::Obj, Kind::Mtl, Kind::Toml, Kind::Lights] {
+    for kind in Kind::ALL {
         for (name, bytes) in seeds(kind) {
             let o = run_case(kind, &ws.0, bytes);
             match (&o, name.starts_with("bad-")) {

@@ -24,6 +24,17 @@ pub const TOKENS: &[&str] = &[
     "\"", "'", "[", "]", "{", "}", ",", "true", "/dev/zero", "/dev/urandom", "/proc/self/mem", "../", "missing.png", "missing.mtl",
     "../textures/albedo.png", "../textures/truncated.png", "../obj/cube.obj", "/dev/zero.obj", "../mtl/valid.mtl",
     "fuzz-input.obj", "fuzz-input.toml",
+    // Light types in descriptions.
+    "type", "\"point\"", "\"spot\"", "\"directional\"", "direction", "inner_angle", "outer_angle", "spot_fraction",
+    // glTF: keys, enums and containers.
+    "\"asset\"", "\"version\"", "\"2.0\"", "\"scene\"", "\"scenes\"", "\"nodes\"", "\"mesh\"", "\"meshes\"", "\"primitives\"",
+    "\"attributes\"", "\"POSITION\"", "\"NORMAL\"", "\"TEXCOORD_0\"", "\"indices\"", "\"mode\"", "\"accessors\"",
+    "\"bufferView\"", "\"bufferViews\"", "\"byteOffset\"", "\"byteLength\"", "\"byteStride\"", "\"componentType\"", "\"count\"",
+    "\"VEC3\"", "\"SCALAR\"", "5126", "5123", "5125", "5121", "\"buffers\"", "\"uri\"", "\"data:application/octet-stream;base64,\"",
+    "\"quad.bin\"", "\"matrix\"", "\"scale\"", "\"rotation\"", "\"translation\"", "\"children\"", "\"camera\"", "\"cameras\"",
+    "\"yfov\"", "\"znear\"", "\"zfar\"", "\"materials\"", "\"alphaMode\"", "\"BLEND\"", "\"MASK\"", "\"alphaCutoff\"",
+    "\"baseColorFactor\"", "\"extensions\"", "\"extensionsRequired\"", "\"KHR_lights_punctual\"", "\"light\"", "\"lights\"",
+    "\"range\"", "\"spot\"", "\"innerConeAngle\"", "\"outerConeAngle\"", "\"KHR_draco_mesh_compression\"", "null", "glTF", "JSON", "BIN\0",
 ];
 
 /// A choice among `len` things, shrinking towards the first.

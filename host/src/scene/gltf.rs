@@ -152,11 +152,21 @@ fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String
     check_views(&doc, &buffers)?;
     let images = doc
         .images()
-        .map(|i| match gltf::image::Data::from_source(i.source(), Some(base), &buffers) {
-            Ok(d) => Some(d),
-            Err(e) => {
-                warn(format!("image {}: {}; materials drawn without it", i.index(), one_line(&e.to_string())));
-                None
+        .map(|i| {
+            // `source()` unwraps a `uri`, or a `bufferView` with its `mimeType`: an image with
+            // neither has no source to read.
+            let j = &json.images[i.index()];
+            let source = match (&j.uri, &j.buffer_view, &j.mime_type) {
+                (Some(_), _, _) | (None, Some(_), Some(_)) => Ok(i.source()),
+                (None, Some(_), None) => Err("a bufferView without a mimeType".to_string()),
+                (None, None, _) => Err("neither a uri nor a bufferView".to_string()),
+            };
+            match source.and_then(|s| gltf::image::Data::from_source(s, Some(base), &buffers).map_err(|e| one_line(&e.to_string()))) {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    warn(format!("image {}: {e}; materials drawn without it", i.index()));
+                    None
+                }
             }
         })
         .collect();
