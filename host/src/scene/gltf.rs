@@ -37,7 +37,7 @@
 //!    wrong type, vertex indices past the vertices, cones out of range. They are checked before
 //!    the crate reads the data (it would index past them); a panic it raises anyway becomes an
 //!    error too.
-use super::{face_averaged_normals, Camera, Directional, Material, Mesh, Scene, Spot, Texture, TextureKind};
+use super::{face_averaged_normals, unit_vector, Camera, Directional, Material, Mesh, Scene, Spot, Texture, TextureKind};
 use anyhow::{anyhow, bail, Result};
 use glam::{Mat3, Mat4, Vec3};
 use shaders::layout::PointLight;
@@ -98,10 +98,20 @@ fn one_line(text: &str) -> String {
 
 /// The document, its buffers and its images (`None`: an image that failed, with a warning),
 /// checked so that reading them cannot index past an array or a buffer (step 6).
+/// Bytes of a `.glb` header: magic, version, total length.
+const GLB_HEADER_BYTES: u32 = 12;
+
 type Imported = (gltf::Document, Vec<gltf::buffer::Data>, Vec<Option<gltf::image::Data>>);
 
 fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read it: {e}"))?;
+    // A `.glb` header's total length below the header's own 12 bytes makes the crate subtract
+    // past zero: refused here, as the container error it is.
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)).map(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]])) {
+        if length < GLB_HEADER_BYTES {
+            return Err(format!("not a valid .glb container: its header gives a total length of {length} bytes, less than the {GLB_HEADER_BYTES}-byte header"));
+        }
+    }
     let gltf::Gltf { document: doc, mut blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| match e {
         gltf::Error::Deserialize(e) if e.is_data() => format!("not a glTF 2.0 document: {}", one_line(&e.to_string())),
         gltf::Error::Deserialize(e) => format!("not valid JSON: {}", one_line(&e.to_string())),
@@ -307,7 +317,7 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, depth: usize, 
                 indices.chunks_exact_mut(3).for_each(|t| t.swap(1, 2));
             }
             let normals = match reader.read_normals() {
-                Some(n) => n.map(|n| (normal_matrix * Vec3::from_array(n)).normalize_or(Vec3::Y).to_array()).collect(),
+                Some(n) => n.map(|n| unit_vector(normal_matrix * Vec3::from_array(n)).unwrap_or(Vec3::Y).to_array()).collect(),
                 None => face_averaged_normals(&positions, &indices),
             };
             let uvs: Vec<[f32; 2]> = match reader.read_tex_coords(0) {

@@ -468,6 +468,18 @@ fn bounds_of_points<'a>(points: impl Iterator<Item = &'a [f32; 3]>) -> (Vec3, Ve
     }
 }
 
+/// `v / |v|`, computed after dividing by the largest component: a vector whose squared length
+/// underflows or overflows f32 (components near 10⁻²⁰ or 10²⁰, where `x²` is subnormal or
+/// infinite) still comes out of unit length, where a plain normalisation is off by up to a few
+/// per mille or fails. `None` for a zero, infinite or NaN vector.
+pub fn unit_vector(v: Vec3) -> Option<Vec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    (v / m).try_normalize()
+}
+
 /// Area-weighted vertex normals of a triangle list (zero-area corners fall back to +y).
 pub fn face_averaged_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![Vec3::ZERO; positions.len()];
@@ -478,5 +490,5 @@ pub fn face_averaged_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f3
             acc[i as usize] += n;
         }
     }
-    acc.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y).to_array()).collect()
+    acc.into_iter().map(|n| unit_vector(n).unwrap_or(Vec3::Y).to_array()).collect()
 }

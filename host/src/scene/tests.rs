@@ -436,3 +436,21 @@ fn descriptions_keep_the_spot_share_of_generated_lights() {
     assert_eq!(load("listed.toml", &listed).spot_share, None, "a listed light");
     assert_eq!(load("points.toml", &generated.replace("spot_fraction = 0.5\n", "")).spot_share, None, "no spots");
 }
+
+/// Unit vectors from vectors whose squared length leaves f32's normal range: tiny (squares
+/// subnormal) and huge (squares infinite) components give unit length; zero, ∞ and NaN give none.
+#[test]
+fn unit_vectors_survive_tiny_and_huge_components() {
+    use super::unit_vector;
+    use glam::Vec3;
+    for scale in [1e-30f32, 1e-20, 1e-19, 3e-23, 1.0, 1e19, 1e20, 1e30, 1e37] {
+        for v in [Vec3::new(0.0, -1.0, -1.0), Vec3::new(1.0, 2.0, 3.0), Vec3::new(-7.0, 0.0, 0.0)] {
+            let u = unit_vector(v * scale).unwrap_or_else(|| panic!("{v} × {scale:e}: no unit vector"));
+            assert!((u.length() - 1.0).abs() < 1e-6, "{v} × {scale:e}: length {}", u.length());
+            assert!((u - v.normalize()).length() < 1e-6, "{v} × {scale:e}: direction {u}");
+        }
+    }
+    for v in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::new(f32::NAN, 1.0, 0.0), Vec3::new(1.0, f32::NEG_INFINITY, 1.0)] {
+        assert_eq!(unit_vector(v), None, "{v}");
+    }
+}

@@ -166,7 +166,7 @@ impl Builder {
     fn finish(self) -> ObjMesh {
         let mut computed: Option<Vec<[f32; 3]>> = None;
         let normals = (0..self.positions.len())
-            .map(|i| match self.normals[i].and_then(|n| Vec3::from_array(n).try_normalize()) {
+            .map(|i| match self.normals[i].and_then(|n| super::unit_vector(Vec3::from_array(n))) {
                 Some(n) => n.to_array(),
                 None => computed.get_or_insert_with(|| face_averaged_normals(&self.positions, &self.indices))[i],
             })
