@@ -240,3 +240,18 @@ fn the_viewer_honours_stats_frames_exit_after_and_tessellation_flags() {
     view(&dir, "plain", &["--scene", "nurbs", "--lights", "200", "--exit-after", "2", "--stats", plain.to_str().unwrap()], "");
     assert_ne!(json("view-plain.json")["tess_levels"], json("view-level.json")["tess_levels"], "--tess-level changed nothing");
 }
+
+/// What the window shows is the frame `render` writes: with the overlay hidden, the swapchain
+/// image read back after it is drawn (`presented` in a script) equals the viewer's frame (`shot`)
+/// within 1/255, and that frame equals `render` at the same camera.
+#[test]
+fn the_presented_image_is_the_rendered_frame() {
+    let dir = TempDir::new("viewer-presented");
+    let (shot, presented) = (dir.join("shot.png"), dir.join("presented.png"));
+    let script = format!("0 key Space\n4 shot {}\n4 presented {}\n8 key Escape\n", shot.display(), presented.display());
+    view(&dir, "presented", &["--scene", "city", "--lights", &LIGHTS.to_string(), "--no-overlay"], &script);
+    assert_eq!(rgba(&presented).0, SIZE, "the presented image has the window's size");
+    let d = worst(&shot, &presented);
+    assert!(d <= 1, "the presented image differs from the frame by {d}/255");
+    assert_matches_render(&shot, &dir);
+}

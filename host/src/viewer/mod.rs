@@ -88,6 +88,7 @@ pub fn run(dev: &DeviceArgs, a: &ViewArgs) -> Result<()> {
         pending_resize: None,
         shots: 0,
         steps: 0,
+        presented_shot: None,
         error: None,
     };
     event_loop.run_app(&mut app).map_err(|e| anyhow!("the window's event loop failed: {e}"))?;
@@ -141,6 +142,8 @@ struct App {
     shots: u32,
     /// Frames stepped (the script's clock).
     steps: u64,
+    /// Where the presented image a script asked for goes (`presented FILE.png`).
+    presented_shot: Option<PathBuf>,
     error: Option<anyhow::Error>,
 }
 
@@ -244,6 +247,11 @@ impl App {
                     self.viewer.screenshot(&self.gpu, &path, &lines).with_context(|| format!("--script shot {}", path.display()))?;
                     eprintln!("wrote {}", path.display());
                 }
+                Event::Presented(path) => {
+                    let p = self.presenter.as_mut().context("--script presented: no window to read back")?;
+                    p.capture_next().with_context(|| format!("--script presented {}", path.display()))?;
+                    self.presented_shot = Some(path);
+                }
             }
         }
         Ok(true)
@@ -314,6 +322,11 @@ impl App {
         let s = renderer.settings();
         if presenter.present(renderer.frame_buffer(), s.width, s.height, overlay)? == Presented::Shown {
             self.steps += 1;
+        }
+        if let Some((w, h, pixels)) = presenter.take_capture() {
+            let path = self.presented_shot.take().context("a presented image nobody asked for")?;
+            crate::debug_frame::save_png(&path, w, h, &pixels).with_context(|| format!("--script presented {}", path.display()))?;
+            eprintln!("wrote {}", path.display());
         }
         let messages = self.gpu.ctx.validation_messages();
         if !messages.is_empty() {

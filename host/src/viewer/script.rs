@@ -13,6 +13,7 @@
 //! | `mouse-move DX DY` | mouse motion in pixels (turns the camera while the right button is held) |
 //! | `resize W H` | ask the window for `W × H` physical pixels; the script waits until it has them |
 //! | `shot FILE.png` | write the frame (without the overlay) as PNG, and `FILE.json` beside it: the stats of `render --stats` and the viewer's state (camera bookmark, animation time, overlay text) |
+//! | `presented FILE.png` | write the next frame as the window shows it: the swapchain image read back after the overlay, before it is presented |
 //!
 //! Keys: `W A S D Q E Ctrl Shift Tab 1`…`9` `Plus Minus H V C Space F1 F12 Escape`
 //! (case-insensitive). E.g. `0 key Space` (pause the lights), `10 down W`, `40 up W`,
@@ -30,6 +31,8 @@ pub enum Event {
     MouseMove(f32, f32),
     Resize(u32, u32),
     Shot(PathBuf),
+    /// The next presented swapchain image, read back.
+    Presented(PathBuf),
 }
 
 /// A parsed script: events by frame, in file order.
@@ -107,12 +110,13 @@ impl Script {
                     want(2)?;
                     events.push((frame, Event::Resize(size(args[1])?, size(args[2])?)));
                 }
-                "shot" => {
+                "shot" | "presented" => {
                     want(1)?;
                     if !args[1].to_ascii_lowercase().ends_with(".png") {
-                        bail!("line {n}: shot {:?}: the file must end in .png", args[1]);
+                        bail!("line {n}: {} {:?}: the file must end in .png", args[0], args[1]);
                     }
-                    events.push((frame, Event::Shot(PathBuf::from(args[1]))));
+                    let path = PathBuf::from(args[1]);
+                    events.push((frame, if args[0] == "shot" { Event::Shot(path) } else { Event::Presented(path) }));
                 }
                 other => bail!("line {n}: unknown command {other:?} (down, up, key, mouse-down, mouse-up, mouse-move, resize, shot)"),
             }
@@ -139,7 +143,7 @@ impl Script {
     /// The directories of the shots, to check before the window opens.
     pub fn shot_paths(&self) -> impl Iterator<Item = &Path> {
         self.events.iter().filter_map(|(_, e)| match e {
-            Event::Shot(p) => Some(p.as_path()),
+            Event::Shot(p) | Event::Presented(p) => Some(p.as_path()),
             _ => None,
         })
     }

@@ -16,7 +16,7 @@
 use super::context::Context;
 use super::error::{CallContext, VkError, VkResult};
 use super::image::Image;
-use super::memory::Buffer;
+use super::memory::{Buffer, MemoryLocation};
 use super::overlay::Overlay;
 use ash::{khr, vk};
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -88,6 +88,12 @@ pub struct Presenter {
     frame_image: Option<Image>,
     /// The swapchain must be recreated before the next frame (suboptimal, resized).
     stale: bool,
+    /// The swapchain's images can be copied from (the surface offers `TRANSFER_SRC`).
+    readable: bool,
+    /// Read the next presented image back ([`Presenter::capture_next`]).
+    capture: bool,
+    /// The last image read back: `(width, height, RGBA8 words, R in the low byte)`.
+    captured: Option<(u32, u32, Vec<u32>)>,
     window_extent: vk::Extent2D,
 }
 
@@ -134,6 +140,9 @@ impl Presenter {
             acquired,
             frame_image: None,
             stale: true,
+            readable: false,
+            capture: false,
+            captured: None,
             window_extent: vk::Extent2D { width: extent.0, height: extent.1 },
         };
         this.recreate()?;
@@ -193,9 +202,14 @@ impl Presenter {
             }
             return Ok(());
         }
-        let usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        let mut usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
         if !caps.supported_usage_flags.contains(usage) {
             return Err(VkError::Unsupported { device: ctx.info.name.clone(), missing: format!("swapchain images usable as {usage:?} (the surface offers {:?})", caps.supported_usage_flags) });
+        }
+        // Copied from only when a presented image is read back ([`Presenter::capture_next`]).
+        self.readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        if self.readable {
+            usage |= vk::ImageUsageFlags::TRANSFER_SRC;
         }
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
@@ -265,6 +279,23 @@ impl Presenter {
 
     /// Shows the frame `frame` (`width × height` packed RGBA8 words) with the overlay over it
     /// (see the module doc).
+    /// Reads the next presented image back (after the overlay, before it is presented):
+    /// [`Presenter::take_capture`] then has it. Fails where the surface's images cannot be
+    /// copied from.
+    pub fn capture_next(&mut self) -> VkResult<()> {
+        if !self.readable {
+            return Err(VkError::Unsupported { device: self.ctx.info.name.clone(), missing: "swapchain images that can be read back (TRANSFER_SRC)".into() });
+        }
+        self.capture = true;
+        Ok(())
+    }
+
+    /// The image [`Presenter::capture_next`] asked for, once presented: `(width, height, RGBA8
+    /// words, R in the low byte)`.
+    pub fn take_capture(&mut self) -> Option<(u32, u32, Vec<u32>)> {
+        self.captured.take()
+    }
+
     pub fn present(&mut self, frame: &Buffer, width: u32, height: u32, overlay: Option<&mut Overlay>) -> VkResult<Presented> {
         if self.stale {
             self.recreate()?;
@@ -292,6 +323,10 @@ impl Presenter {
         let (src, image, view, extent) = (self.frame_image.as_ref().expect("made above"), chain.images[index as usize], chain.views[index as usize], chain.extent);
         let semaphore = chain.rendered[index as usize];
         let ctx = &self.ctx;
+        let mut readback = match self.capture {
+            true => Some(Buffer::new(ctx, "presented image (read-back)", 4 * extent.width as u64 * extent.height as u64, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?),
+            false => None,
+        };
         ctx.submit_signalling_and_wait(Some(semaphore), |cmd| {
             let colour = vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1);
             let layers = vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
@@ -362,6 +397,26 @@ impl Presenter {
                 layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
                 (stage, access) = (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
             }
+            if let Some(buf) = &readback {
+                let to_src = vk::ImageMemoryBarrier::default()
+                    .old_layout(layout)
+                    .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+                    .src_access_mask(access)
+                    .dst_access_mask(vk::AccessFlags::TRANSFER_READ)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .image(image)
+                    .subresource_range(colour);
+                let region = vk::BufferImageCopy::default().image_subresource(layers).image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
+                let host = vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::TRANSFER_WRITE).dst_access_mask(vk::AccessFlags::HOST_READ);
+                unsafe {
+                    d.cmd_pipeline_barrier(cmd, stage, vk::PipelineStageFlags::TRANSFER, vk::DependencyFlags::empty(), &[], &[], &[to_src]);
+                    d.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region]);
+                    d.cmd_pipeline_barrier(cmd, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::HOST, vk::DependencyFlags::empty(), &[host], &[], &[]);
+                }
+                layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+                (stage, access) = (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ);
+            }
             let to_present = vk::ImageMemoryBarrier::default()
                 .old_layout(layout)
                 .new_layout(vk::ImageLayout::PRESENT_SRC_KHR)
@@ -373,6 +428,14 @@ impl Presenter {
             unsafe { d.cmd_pipeline_barrier(cmd, stage, vk::PipelineStageFlags::BOTTOM_OF_PIPE, vk::DependencyFlags::empty(), &[], &[], &[to_present]) };
             Ok(())
         })?;
+        if let Some(buf) = readback.as_mut() {
+            let words: Vec<u32> = buf.read((extent.width * extent.height) as usize)?;
+            // The surface's byte order to RGBA (R in the low byte), as the frame is packed.
+            let bgra = matches!(self.format, vk::Format::B8G8R8A8_UNORM | vk::Format::B8G8R8A8_SRGB);
+            let rgba = words.into_iter().map(|w| if bgra { (w & 0xff00_ff00) | ((w >> 16) & 0xff) | ((w & 0xff) << 16) } else { w }).collect();
+            self.captured = Some((extent.width, extent.height, rgba));
+            self.capture = false;
+        }
         let (swapchains, indices, waits) = ([chain.raw], [index], [semaphore]);
         let info = vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
         let queue = self.ctx.queue.lock().unwrap_or_else(|e| e.into_inner());
