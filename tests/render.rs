@@ -486,3 +486,65 @@ fn clustered_techniques_cull_spot_lights_by_their_cones() {
         assert!(a < b, "{t:?}: {a} light references (longest list for tiles) with spots, {b} as points");
     }
 }
+
+/// Transparency against the closed form of "over", end to end on the GPU: a wall behind `n`
+/// coincident panes of coverage α (one pane of α = ½; 50 of α = 0.1), both lit only by a
+/// directional light travelling along the view axis, the panes filling the view. A pane's
+/// colour is then the CPU's `shade_directional` of its material (albedo quantised to 8 bits, as
+/// the pass does) tonemapped, `c`; the wall's `B` is read from the frame without the panes; every
+/// pixel must be `c·(1 − (1 − α)^n) + B·(1 − α)^n` within 1/255 after the sRGB encoding, for every
+/// technique that draws transparency, with the exact and the k-nearest resolves.
+#[test]
+fn coincident_panes_compose_to_the_closed_form() {
+    use shaders::lighting::{decode_srgb8, encode_srgb8, shade_directional, tonemap};
+    let gpu = common::gpu();
+    let dir = common::temp::TempDir::new("closed-form-panes");
+    let albedo = [0.6f32, 0.5, 0.4];
+    let quad = |z: f32, s: f32, base: usize| format!("v {} {} {z}\nv {s} {} {z}\nv {s} {s} {z}\nv {} {s} {z}\nf {} {} {} {}\n", -s, -s, -s, -s, base + 1, base + 2, base + 3, base + 4);
+    for (n, alpha) in [(1usize, 0.5f32), (50, 0.1)] {
+        let mtl = format!("newmtl wall\nKd 0.5 0.5 0.5\nKs 0 0 0\nnewmtl pane\nKd {} {} {}\nKs 0 0 0\nd {alpha}\n", albedo[0], albedo[1], albedo[2]);
+        dir.write("panes.mtl", &mtl);
+        let mut obj = String::from("mtllib panes.mtl\nusemtl wall\n") + &quad(-10.0, 40.0, 0);
+        let bare_obj = obj.clone();
+        obj += "usemtl pane\n";
+        for k in 0..n {
+            obj += &quad(-5.0, 20.0, 4 * (k + 1));
+        }
+        dir.write("panes.obj", &obj);
+        dir.write("wall.obj", &bare_obj);
+        let toml = |geometry: &str| {
+            format!(
+                "geometry = \"{geometry}\"\n[camera]\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\nup = [0, 1, 0]\nfov_y = 60\nnear = 0.1\nfar = 100\n\
+                 [[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\ncolour = [1, 0.9, 0.8]\nintensity = 2\n"
+            )
+        };
+        let load = |name: &str, geometry: &str| Scene::load(dir.write(name, &toml(geometry)).to_str().unwrap(), &common::assets::dir()).unwrap_or_else(|e| panic!("{e:#}"));
+        let (panes, wall) = (load("panes.toml", "panes.obj"), load("wall.toml", "wall.obj"));
+        assert!(panes.has_transparency() && !wall.has_transparency());
+        // The pane's colour: the pass's surface (normal +z towards the camera, albedo in 8 bits).
+        let q = albedo.map(|a| shaders::raster::unorm8(a));
+        let d = &panes.directional[0];
+        let radiance = shade_directional::<false>(glam::Vec3::new(0.0, 0.0, -5.0), glam::Vec3::Z, glam::Vec3::from_array(q), 0.0, 0.5, -d.direction.normalize(), glam::Vec3::from_array(d.colour), d.intensity, 0);
+        let c = tonemap(radiance, 1.0).to_array().map(f64::from);
+        let t = (1.0 - alpha as f64).powi(n as i32);
+        for &technique in Technique::ALL.iter().filter(|t| t.draws_transparency()) {
+            for oit in [OitVariant::Exact, OitVariant::K4, OitVariant::K1] {
+                let s = Settings { oit, ..settings(64, 36, technique) };
+                let b = frame(&gpu, &wall, &wall.lights, &s).pixels;
+                let got = frame(&gpu, &panes, &panes.lights, &s).pixels;
+                let worst = b
+                    .iter()
+                    .zip(&got)
+                    .map(|(&bw, &g)| {
+                        let bl = decode_srgb8(bw).to_array().map(f64::from);
+                        let want = encode_srgb8(glam::Vec3::from_array(core::array::from_fn(|k| (c[k] * (1.0 - t) + bl[k] * t) as f32)));
+                        worst_channel(&[g], &[want])
+                    })
+                    .max()
+                    .unwrap();
+                assert!(worst <= 1, "{technique:?}, {oit:?}: {n} pane(s) of α {alpha} are {worst}/255 off the closed form");
+            }
+        }
+    }
+    common::assert_clean(&gpu);
+}
