@@ -3,9 +3,9 @@
 //! Every technique has one shape ([`technique::LightingTechnique`]: create → record → grow →
 //! report) and lives in its own file: `deferred.rs` (the brute-force reference), `clustered.rs`
 //! (`clustered-naive`, `clustered-bvh` with `bvh.rs`, `sort.rs`, `bitonic.rs`, `scan.rs`),
-//! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`; `transparent.rs`
-//! is the transparent pass the techniques whose [`Description::transparent`] is `Drawn` add for
-//! scenes with transparent materials (the others refuse such scenes in one line).
+//! `tiled.rs` (`tiled`, `tiled-2.5d`), `clustered_aabb.rs`, `forward_plus.rs`, `raster_tiled.rs`;
+//! `transparent.rs` is the transparent pass the techniques whose [`Description::transparent`] is
+//! `Drawn` add for scenes with transparent materials (the others refuse such scenes in one line).
 //! The frame loop ([`render`], a loop over the per-frame [`Renderer`] of `renderer.rs`, which the
 //! viewer drives too) owns what they share: uploads, the G-buffer pass (`gbuffer.rs`, recorded once per
 //! frame for every technique that uses it), the async-compute overlap, the warm-up and timed
@@ -21,11 +21,10 @@
 //! (The README's "Adding a technique" has the steps with the shader side.)
 //! 1. Write `render/<name>.rs`: a `pub const` [`Description`] (name, summary, constructor,
 //!    transparency, G-buffer use, raster passes, light cost, tile and lavapipe limits, knobs, own
-//!    kernels), a
-//!    struct with a constructor `fn(&Gpu, &FrameInputs) -> Result<Self>` (allocate, create its
-//!    pipelines, check limits) and an `impl LightingTechnique` (at least `record` and `buffers`;
-//!    `grow_if_needed`, `stats` and `record_async` where it has them). It records through
-//!    `vk::Recorder` (dispatches, raster passes) and holds no `unsafe` or Vulkan types.
+//!    kernels), a struct with a constructor `fn(&Gpu, &FrameInputs) -> Result<Self>` (allocate,
+//!    create its pipelines, check limits) and an `impl LightingTechnique` (at least `record` and
+//!    `buffers`; `grow_if_needed`, `stats` and `record_async` where it has them). It records
+//!    through `vk::Recorder` (dispatches, raster passes) and holds no `unsafe` or Vulkan types.
 //! 2. Register it with one line in the `techniques!` list below: `[module] Variant =>
 //!    module::DESCRIPTION` (the brackets declare the module). The CLI (`--technique`),
 //!    `manylights bench` (`--techniques all`), the viewer, the preflight checks and the tests
