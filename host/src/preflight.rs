@@ -29,7 +29,6 @@ pub fn frame_bytes_per_pixel(precision: Precision) -> u64 {
     2 * gbuffer + 4
 }
 
-
 fn mib(bytes: u64) -> String {
     format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
 }
