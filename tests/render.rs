@@ -522,7 +522,7 @@ fn coincident_panes_compose_to_the_closed_form() {
         let (panes, wall) = (load("panes.toml", "panes.obj"), load("wall.toml", "wall.obj"));
         assert!(panes.has_transparency() && !wall.has_transparency());
         // The pane's colour: the pass's surface (normal +z towards the camera, albedo in 8 bits).
-        let q = albedo.map(|a| shaders::raster::unorm8(a));
+        let q = albedo.map(shaders::raster::unorm8);
         let d = &panes.directional[0];
         let radiance = shade_directional::<false>(glam::Vec3::new(0.0, 0.0, -5.0), glam::Vec3::Z, glam::Vec3::from_array(q), 0.0, 0.5, -d.direction.normalize(), glam::Vec3::from_array(d.colour), d.intensity, 0);
         let c = tonemap(radiance, 1.0).to_array().map(f64::from);

@@ -258,7 +258,7 @@ mod tests {
             assert!(d.name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '.'), "{}: a command-line name", d.name);
             assert!(d.summary.ends_with('.') && !d.summary.contains('\n'), "{}: a one-line summary", d.name);
             if let Some(max) = d.max_tile {
-                assert!(max >= 1 && max <= shaders::cluster_key::MAX_TILE_SIZE, "{}: max tile {max}", d.name);
+                assert!((1..=shaders::cluster_key::MAX_TILE_SIZE).contains(&max), "{}: max tile {max}", d.name);
             }
             assert!((d.llvmpipe_lights)(32) > 0, "{}: takes lights on lavapipe", d.name);
         }
