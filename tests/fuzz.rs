@@ -152,7 +152,7 @@ fn names_a_place(msg: &str) -> bool {
     let gltf = [
         "buffer ", "view ", "accessor ", "primitive", "meshes[", "nodes[", "accessors[", "bufferViews[", "buffers[", "materials[", "textures[",
         "images[", "samplers[", "cameras[", "scenes[", "skins[", "animations[", "extensions", ".glb container", "chunk", "column ",
-        "invalid glTF: ",
+        "invalid glTF: ", "scenes: ",
     ];
     let items: Vec<&str> = items.iter().chain(&gltf).copied().collect();
     line || keys.iter().chain(&items).any(|k| msg.contains(k))

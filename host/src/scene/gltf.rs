@@ -237,7 +237,7 @@ fn load_checked(path: &Path) -> Result<Scene> {
 
     let draco = doc.extensions_used().any(|e| e == DRACO) || doc.extensions_required().any(|e| e == DRACO);
     let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
-    let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {} has no scene", path.display()))?;
+    let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {}: scenes: the document lists no scene to draw", path.display()))?;
     for node in scene.nodes() {
         visit(&mut g, &node, Mat4::IDENTITY, 0, path)?;
     }
