@@ -163,13 +163,13 @@ fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String
     let images = doc
         .images()
         .map(|i| {
-            // `source()` unwraps a `uri`, or a `bufferView` with its `mimeType`: an image with
-            // neither has no source to read.
+            // `source()` takes a `bufferView` first and unwraps its `mimeType`, else unwraps a
+            // `uri`: an image whose chosen source lacks them has nothing to read.
             let j = &json.images[i.index()];
-            let source = match (&j.uri, &j.buffer_view, &j.mime_type) {
-                (Some(_), _, _) | (None, Some(_), Some(_)) => Ok(i.source()),
-                (None, Some(_), None) => Err("a bufferView without a mimeType".to_string()),
-                (None, None, _) => Err("neither a uri nor a bufferView".to_string()),
+            let source = match (&j.buffer_view, &j.mime_type, &j.uri) {
+                (Some(_), Some(_), _) | (None, _, Some(_)) => Ok(i.source()),
+                (Some(_), None, _) => Err("a bufferView without a mimeType".to_string()),
+                (None, _, None) => Err("neither a uri nor a bufferView".to_string()),
             };
             match source.and_then(|s| gltf::image::Data::from_source(s, Some(base), &buffers).map_err(|e| one_line(&e.to_string()))) {
                 Ok(d) => Some(d),
