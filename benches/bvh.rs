@@ -57,6 +57,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
+        msaa: 1,
     }
 }
 

@@ -56,6 +56,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
+        msaa: 1,
         width: WIDTH,
         height: HEIGHT,
         tile_size: 16,

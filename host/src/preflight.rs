@@ -68,6 +68,38 @@ pub fn check_frame(info: &DeviceInfo, width: u32, height: u32, tile_size: u32, p
     Ok(())
 }
 
+/// `--msaa N`: a count of `shaders::msaa::SAMPLE_COUNTS` that the device supports for the
+/// G-buffer ([`DeviceInfo::msaa_sample_counts`]), a technique with an edge pass
+/// ([`crate::render::Description::msaa`]), and `N` samples of every G-buffer buffer in one
+/// binding and, with the frame, in the device's memory.
+pub fn check_msaa(info: &DeviceInfo, technique: Technique, samples: u32, width: u32, height: u32, precision: Precision) -> Result<()> {
+    if samples == 1 {
+        return Ok(());
+    }
+    if !shaders::msaa::SAMPLE_COUNTS.contains(&samples) {
+        bail_input!("--msaa {samples}: the sample count must be one of {:?}", shaders::msaa::SAMPLE_COUNTS);
+    }
+    if info.msaa_sample_counts & samples == 0 {
+        let here: Vec<u32> = shaders::msaa::SAMPLE_COUNTS.into_iter().filter(|n| info.msaa_sample_counts & n != 0).collect();
+        bail_input!("--msaa {samples}: {} renders and reads G-buffers of {here:?} samples per pixel only", info.name);
+    }
+    if !technique.description().msaa {
+        let with: Vec<&str> = Technique::ALL.iter().filter(|t| t.description().msaa).map(|t| t.name()).collect();
+        bail_input!("--msaa {samples}: {} shades once per pixel (it has no per-sample edge pass); with MSAA: {}", technique.name(), with.join(", "));
+    }
+    let pixels = width as u64 * height as u64;
+    let normals = samples as u64 * pixels * 4 * precision.gbuffer_words() as u64;
+    let range = info.max_storage_buffer_range as u64;
+    if normals > range {
+        bail_input!("--msaa {samples} at {width}x{height}: the G-buffer normals of every sample need {} in one buffer; {} addresses at most {} per buffer", mib(normals), info.name, mib(range));
+    }
+    let total = pixels * (samples as u64 * crate::render::msaa::bytes_per_sample(precision) + 4 + 4);
+    if info.device_local_bytes > 0 && total > info.device_local_bytes {
+        bail_input!("--msaa {samples} at {width}x{height}: the G-buffer of every sample needs {}; {}'s largest device-local heap holds {}", mib(total), info.name, mib(info.device_local_bytes));
+    }
+    Ok(())
+}
+
 /// `--tile-size` for a technique: at most its [`crate::render::Description::max_tile`] (the tiled
 /// techniques and Forward+ cull tiles of at most `MAX_TILED_TILE` px).
 pub fn check_tile_for(technique: Technique, tile_size: u32) -> Result<()> {
@@ -142,6 +174,7 @@ mod tests {
             graphics_family: 0,
             async_compute_family: None,
             kernel_statistics: false,
+            msaa_sample_counts: 1 | 2 | 4 | 8,
         }
     }
 

@@ -102,6 +102,11 @@ pub struct RenderArgs {
     /// beneath the passes, and in `--stats`): where a pass's time goes.
     #[arg(long)]
     pub dispatch_times: bool,
+    /// Samples per pixel of the G-buffer: 1 (no MSAA), 2, 4 or 8 (where the device has them).
+    /// Edge pixels (samples of other surfaces, `shaders::msaa`) are shaded per sample, the others
+    /// once; techniques without a per-sample edge pass refuse more than 1.
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    pub msaa: u32,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
@@ -127,6 +132,7 @@ impl RenderArgs {
             unique_clusters: self.unique_clusters,
             oit: self.oit,
             dispatch_times: self.dispatch_times,
+            msaa: self.msaa,
         }
     }
 }
@@ -139,6 +145,7 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let f = &a.frame;
     preflight::check_frame(info, f.width, f.height, f.tile_size, a.normal_precision)?;
     preflight::check_tile_for(a.technique, f.tile_size)?;
+    preflight::check_msaa(info, a.technique, a.msaa, f.width, f.height, a.normal_precision)?;
     preflight::check_lights(info, a.technique, f.tile_size, a.lights as u64, &format!("--lights {}", a.lights))?;
     check_output_dir("--out", &f.out)?;
     if let Some(stats) = &a.stats {

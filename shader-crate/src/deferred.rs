@@ -8,12 +8,16 @@
 //!    that does not touch the pixel adds exactly 0 ([`crate::lighting`]), so the sum equals that
 //!    over the touching lights.
 //!
-//! **Cost**: `pixels × lights` light evaluations (the host skips it in benchmarks past a budget).
+//! 3. **Edge shading** (`--msaa N`, [`crate::msaa`] step 5) — per edge pixel, every sample with
+//!    every light ([`shade_edges_deferred_diffuse`] / `_specular`).
+//!
+//! **Cost**: `pixels × lights` light evaluations (the host skips it in benchmarks past a budget),
+//! plus `edge pixels × N × lights` with MSAA.
 //! **Memory**: nothing beyond the G-buffer, the lights and the frame.
 use crate::layout::*;
 use crate::light_lists::lights_meeting;
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
-use crate::{lighting, reconstruct};
+use crate::{lighting, msaa, reconstruct};
 use spirv_std::glam::{UVec3, Vec3};
 use spirv_std::spirv;
 
@@ -52,5 +56,44 @@ specular_entries! {
         // The heatmap shows the lights that touch the pixel (the frame-uniform view: no divergence).
         let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };
         frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, touching);
+    }
+}
+
+specular_entries! {
+    shade_edges_deferred_diffuse, shade_edges_deferred_specular;
+    /// Step 3 for edge `slot` of the edge list (`msaa::EDGE_HEADER_WORDS` words, then pixels).
+    fn shade_edges_deferred_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] m: &MsaaParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] edges: &[u32],
+    ) {
+        let m = &crate::light_types::specialise(m, light_types);
+        let p = &m.frame;
+        let slot = linear_index(wg, nwg, local);
+        if slot >= edges[0] {
+            return;
+        }
+        let i = edges[(msaa::EDGE_HEADER_WORDS + slot) as usize];
+        // `move` over values: no pointer to this function's locals in the closure.
+        let (effects, n, view) = (p.effects, p.num_lights, p.view);
+        let shade = move |surface: &shading::Surface| {
+            let mut sum = Vec3::ZERO;
+            shading::shade_lights::<SPECULAR, true, _>(surface, effects, n, lights, &shading::light_range(0, n), &mut sum);
+            shading::shade_directional_lights::<SPECULAR>(surface, effects, n, lights, &mut sum);
+            let pos = surface.pos;
+            let touching = if view == VIEW_HEATMAP { lights_meeting(n, lights, |_, _| {}, move |c, r| lighting::in_range(c, r, pos)) } else { 0 };
+            (sum, touching)
+        };
+        frame[i as usize] = msaa::shade_edge_pixel(p, m.samples, i, bounds, depth, normals, albedo, materials, shade);
     }
 }

@@ -21,13 +21,21 @@ pub struct Kernel<P> {
     pub workgroup_size: [u32; 3],
     /// Uses subgroup operations: the host then requires full subgroups.
     pub cooperative: bool,
+    /// Sampled images bound after the storage buffers, at bindings
+    /// `storage_buffers..storage_buffers + sampled_images` (read texel by texel).
+    pub sampled_images: u32,
     _params: PhantomData<fn() -> P>,
 }
 
 impl<P> Kernel<P> {
     /// A handle (a technique's own kernels are declared beside its entries with this).
     pub const fn new(entry: &'static str, storage_buffers: u32, workgroup_size: [u32; 3], cooperative: bool) -> Self {
-        Self { entry, storage_buffers, workgroup_size, cooperative, _params: PhantomData }
+        Self { entry, storage_buffers, workgroup_size, cooperative, sampled_images: 0, _params: PhantomData }
+    }
+
+    /// The handle of an entry that also binds `n` sampled images after its storage buffers.
+    pub const fn with_sampled_images(self, n: u32) -> Self {
+        Self { sampled_images: n, ..self }
     }
 
     /// Invocations per workgroup.
@@ -37,7 +45,7 @@ impl<P> Kernel<P> {
 
     /// The handle without its push-constant type, for the list of every kernel ([`ALL`]).
     pub const fn erased(&self) -> Kernel<()> {
-        Kernel::new(self.entry, self.storage_buffers, self.workgroup_size, self.cooperative)
+        Kernel::new(self.entry, self.storage_buffers, self.workgroup_size, self.cooperative).with_sampled_images(self.sampled_images)
     }
 }
 
@@ -80,6 +88,16 @@ pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustere
 // Brute-force deferred reference (`deferred.rs`).
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
+/// Its MSAA edge pass (`msaa.rs` step 5): the shading buffers and the edge list.
+pub const SHADE_EDGES_DEFERRED: [Kernel<MsaaParams>; 2] =
+    [linear("deferred::shade_edges_deferred_diffuse", 8), linear("deferred::shade_edges_deferred_specular", 8)];
+
+// MSAA (`msaa.rs`).
+/// The samples of the multisampled G-buffer into the buffers, and the edge list: depth, normals,
+/// albedo, edges; the three targets as sampled images.
+pub const MSAA_GATHER: Kernel<MsaaParams> = linear("msaa::msaa_gather", 4).with_sampled_images(3);
+/// The edge pass's indirect workgroup counts: edges.
+pub const MSAA_EDGE_ARGS: Kernel<()> = Kernel::new("msaa::msaa_edge_args", 1, [1, 1, 1], false);
 /// Resolve of the transparent pass: heads, nodes, frame, counters (`transparency`).
 pub const OIT_RESOLVE: Kernel<OitParams> = linear("transparency::oit_resolve", 4);
 /// Resolve of the weighted blended variant: accumulation, revealage, frame.
@@ -174,6 +192,10 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_CLUSTERED_TILES_SPECULAR.erased(),
     SHADE_DEFERRED_DIFFUSE.erased(),
     SHADE_DEFERRED_SPECULAR.erased(),
+    SHADE_EDGES_DEFERRED[0].erased(),
+    SHADE_EDGES_DEFERRED[1].erased(),
+    MSAA_GATHER.erased(),
+    MSAA_EDGE_ARGS.erased(),
     OIT_RESOLVE.erased(),
     OIT_RESOLVE_WEIGHTED.erased(),
     SCAN_ADD_OFFSETS.erased(),
@@ -267,6 +289,13 @@ pub const GBUFFER_F32: [RasterKernel<DrawParams>; 3] = [
     RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured_f32", 0, 1),
     RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked_f32", 0, 2),
 ];
+/// [`GBUFFER`] for the multisampled G-buffer (`--msaa`, `msaa.rs`): normals of any precision in
+/// a float target (`msaa::float_normal`).
+pub const GBUFFER_MS: [RasterKernel<DrawParams>; 3] = [
+    RasterKernel::new("raster::gbuffer_vs", "raster::gbuffer_fs_ms", 0, 0),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_textured_ms", 0, 1),
+    RasterKernel::new("raster::gbuffer_vs_uv", "raster::gbuffer_fs_masked_ms", 0, 2),
+];
 /// Forward+ depth pre-pass `[opaque, alpha-tested]`: writes each pixel's winning draw.
 pub const FORWARD_DEPTH: [RasterKernel<ForwardParams>; 2] = [
     RasterKernel::new("raster_forward::depth_vs", "raster_forward::depth_fs", 0, 0),
@@ -340,6 +369,9 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     GBUFFER_F32[0].fragment,
     GBUFFER_F32[1].fragment,
     GBUFFER_F32[2].fragment,
+    GBUFFER_MS[0].fragment,
+    GBUFFER_MS[1].fragment,
+    GBUFFER_MS[2].fragment,
     FORWARD_DEPTH[0].fragment,
     FORWARD_DEPTH[1].fragment,
     FORWARD_SHADE[0][0].fragment,

@@ -423,6 +423,19 @@ pub struct TiledParams {
 const _: () = assert!(core::mem::size_of::<TiledParams>() == 112);
 const _: () = assert!(core::mem::size_of::<TiledParams>() <= MAX_PUSH_CONSTANT_BYTES);
 
+/// Push constants of the MSAA passes (`crate::msaa`): the frame and its samples per pixel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
+pub struct MsaaParams {
+    pub frame: FrameParams,
+    /// Samples per pixel (`crate::msaa::SAMPLE_COUNTS`).
+    pub samples: u32,
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(core::mem::size_of::<MsaaParams>() == 112);
+const _: () = assert!(core::mem::size_of::<MsaaParams>() <= MAX_PUSH_CONSTANT_BYTES);
+
 /// Push constants of the Forward+ raster passes (`raster_forward.rs`): the frame and the draw;
 /// `frame.count` carries the draw's index (the pre-pass records each pixel's winning draw).
 #[repr(C)]

@@ -107,6 +107,7 @@ pub mod light_lists;
 pub mod light_types;
 pub mod lighting;
 pub mod morton;
+pub mod msaa;
 pub mod nurbs;
 pub mod octahedral;
 pub mod oit;

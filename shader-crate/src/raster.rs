@@ -14,6 +14,7 @@
 //!   from a material buffer. 4 (or 16) + 4 bytes per pixel beside the 4-byte depth, each once
 //!   as a target and once as a buffer.
 use crate::layout::{DrawParams, RasterCamera};
+use crate::msaa::float_normal;
 use crate::octahedral::{self, Precision};
 use spirv_std::glam::{Mat4, UVec4, Vec2, Vec3, Vec4};
 use spirv_std::image::SampledImage;
@@ -118,6 +119,53 @@ pub fn gbuffer_fs_f32(
 ) {
     let (n, a) = targets(in_normal, front_facing, Vec3::ONE, draw);
     (*out_normal, *out_albedo) = (wide_normal(n), a);
+}
+
+/// [`gbuffer_fs`] for the multisampled G-buffer (`--msaa`): the normal as `crate::msaa::float_normal`
+/// (an `RGBA32_SFLOAT` target at any precision).
+#[spirv(fragment)]
+pub fn gbuffer_fs_ms(
+    in_normal: Vec3,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    out_normal: &mut Vec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, Vec3::ONE, draw);
+    (*out_normal, *out_albedo) = (float_normal(n, draw.normal_precision), a);
+}
+
+/// [`gbuffer_fs_textured`] for the multisampled G-buffer.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_textured_ms(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    out_normal: &mut Vec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, sample_draw_uniform(albedo_map, in_uv).truncate(), draw);
+    (*out_normal, *out_albedo) = (float_normal(n, draw.normal_precision), a);
+}
+
+/// [`gbuffer_fs_masked`] for the multisampled G-buffer.
+#[spirv(fragment)]
+#[allow(clippy::too_many_arguments)]
+pub fn gbuffer_fs_masked_ms(
+    in_normal: Vec3,
+    in_uv: Vec2,
+    #[spirv(front_facing)] front_facing: bool,
+    #[spirv(push_constant)] draw: &DrawParams,
+    #[spirv(descriptor_set = 0, binding = 4)] albedo_map: &Texture2d,
+    #[spirv(descriptor_set = 0, binding = 5)] mask_map: &Texture2d,
+    out_normal: &mut Vec4,
+    out_albedo: &mut Vec4,
+) {
+    let (n, a) = targets(in_normal, front_facing, masked_texel(albedo_map, mask_map, in_uv), draw);
+    (*out_normal, *out_albedo) = (float_normal(n, draw.normal_precision), a);
 }
 
 /// The G-buffer values every fragment variant writes: the normal facing the viewed side,

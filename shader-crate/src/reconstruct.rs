@@ -122,6 +122,21 @@ pub fn view_position(grid: &ClusterGrid, px: u32, py: u32, d: f32) -> Vec3 {
     position_from_numerators(grid, pixel_numerator_x(grid, px), pixel_numerator_y(grid, py), d)
 }
 
+/// View-space position of the framebuffer point `(px + ox/16, py + oy/16)` at distance `d`: a
+/// sample location in sixteenths of a pixel (`crate::msaa::sample_location`). The formula of
+/// [`position_from_numerators`] on the numerators `ndc_x·W = (32·px + 2·ox − 16·W) / 16` and
+/// `ndc_y·H = (16·H − 32·py − 2·oy) / 16`, exact in `f32` (integers below 2^24 divided by a power
+/// of two): at `(8, 8)`, the pixel centre, the same value as [`view_position`], bit for bit.
+#[inline]
+pub fn sample_position(grid: &ClusterGrid, px: u32, py: u32, ox: u32, oy: u32, d: f32) -> Vec3 {
+    let sixteenths = |v: i32| v as f32 * (1.0 / 16.0);
+    let nx = sixteenths((px as i32).wrapping_mul(32).wrapping_add(2 * ox as i32).wrapping_sub(16 * grid.width as i32));
+    let ny = sixteenths((16 * grid.height as i32).wrapping_sub((py as i32).wrapping_mul(32)).wrapping_sub(2 * oy as i32));
+    let h = grid.height as f32;
+    let t = grid.tan_half_fov_y * d;
+    Vec3::new((nx / h) * t, (ny / h) * t, -d)
+}
+
 #[cfg(test)]
 #[path = "reconstruct_tests.rs"]
 mod tests;

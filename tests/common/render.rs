@@ -28,6 +28,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
+        msaa: 1,
     }
 }
 

@@ -154,24 +154,7 @@ pub fn normal_error(reference: &Frame, f: &Frame) -> Option<(f64, f64)> {
 }
 
 fn settings(a: &BenchArgs, technique: Technique, tile_size: u32, precision: Precision) -> Settings {
-    Settings {
-        width: a.width,
-        height: a.height,
-        tile_size,
-        technique,
-        view: View::Shaded,
-        normal_precision: precision,
-        exposure: 1.0,
-        frames: a.frames,
-        read_back: true,
-        bvh_branching: 0,
-        async_compute: true,
-        sort: Default::default(),
-        fp_lists: Default::default(),
-        unique_clusters: Default::default(),
-        oit: Default::default(),
-        dispatch_times: false,
-    }
+    Settings { tile_size, normal_precision: precision, ..super::settings_of(a, technique) }
 }
 
 fn pass(f: &Frame, name: &str) -> f64 {

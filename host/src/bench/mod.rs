@@ -285,6 +285,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         unique_clusters: Default::default(),
         oit: Default::default(),
         dispatch_times: false,
+        msaa: 1,
     }
 }
 

@@ -77,6 +77,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     knobs: &[Knob::UniqueClusters],
     own_kernels: &[],
     own_raster: &[],
+    msaa: false,
 };
 
 pub const CLUSTERED_BVH: Description = Description {

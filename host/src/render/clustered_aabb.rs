@@ -35,6 +35,7 @@ pub const CLUSTERED_AABB: Description = Description {
     knobs: &[],
     own_kernels: &[],
     own_raster: &[],
+    msaa: false,
 };
 
 pub struct ClusteredAabb {

@@ -4,8 +4,11 @@
 //! and the `--oit` resolve), for scenes with transparent draws.
 use super::technique::{boxed, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, TransparentDraws};
 use super::transparent::{OpaqueDepth, Transparency, TransparencyStats};
-use crate::gpu::Gpu;
-use crate::vk::{ImageUse, Recorder, VkResult};
+use super::msaa::Multisampling;
+use crate::gpu::{Gpu, LightCompute};
+use crate::vk::{ImageUse, LightTyped, Recorder, VkResult};
+use shaders::kernels;
+use shaders::layout::MsaaParams;
 use anyhow::{Context as _, Result};
 
 pub const DEFERRED: Description = Description {
@@ -21,15 +24,22 @@ pub const DEFERRED: Description = Description {
     knobs: &[],
     own_kernels: &[],
     own_raster: &[],
+    msaa: true,
 };
 
 pub struct Deferred {
     transparency: Option<Transparency>,
+    /// The MSAA edge pass's pipelines (`--msaa` above 1): every sample of an edge pixel with
+    /// every light.
+    edges: Option<[LightCompute<MsaaParams>; 2]>,
 }
 
 impl Deferred {
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
-        Ok(Self { transparency: Transparency::new(f, gpu, None).context("creating the transparent pass")? })
+        Ok(Self {
+            transparency: Transparency::new(f, gpu, None).context("creating the transparent pass")?,
+            edges: f.msaa.map(|_| kernels::SHADE_EDGES_DEFERRED.map(|k| LightTyped::compute(&gpu.light_compute, k))),
+        })
     }
 }
 
@@ -44,6 +54,17 @@ impl LightingTechnique for Deferred {
                 p.count,
             )
         })?;
+        if let (Some(m), Some(edges)) = (f.msaa, &self.edges) {
+            rec.pass("edge shading", |rec| {
+                rec.dispatch_indirect(
+                    super::shading_pipeline(edges, p)?,
+                    &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &m.edges],
+                    &m.params(p),
+                    &m.edges,
+                    Multisampling::ARGS_WORD,
+                )
+            })?;
+        }
         match &self.transparency {
             Some(tr) => tr.record_shade(rec, f, p, OpaqueDepth { image: &t.depth, from: ImageUse::CopySource }, None),
             None => Ok(()),

@@ -119,6 +119,7 @@ pub const FORWARD_PLUS: Description = Description {
     knobs: &[Knob::FpLists],
     own_kernels: &[],
     own_raster: &[],
+    msaa: false,
 };
 
 pub struct ForwardPlus {

@@ -10,7 +10,8 @@
 use crate::gpu::{normal_target, Gpu, ALBEDO_FORMAT, NORMAL_FORMATS};
 use crate::vk::image::upload_rgba8;
 use crate::vk::{Attachment, Binding, Buffer, Context, Image, ImageUse, Load, Recorder, Sampler, TargetFormat, VkResult};
-use shaders::layout::{DrawParams, MaterialGpu, RasterCamera};
+use super::msaa::Multisampling;
+use shaders::layout::{DrawParams, FrameParams, MaterialGpu, RasterCamera};
 use shaders::octahedral::Precision;
 
 /// One draw: a range of the merged index buffer, its material and its textures (indices into
@@ -150,34 +151,45 @@ impl Geometry {
 pub struct Targets {
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel of the targets (`--msaa`): with more than one, the buffers hold one
+    /// plane of `width × height` entries per sample, sample `s` of pixel `i` at `s·n + i`
+    /// (`shaders::msaa`), plane 0 being what a one-sample frame holds.
+    pub samples: u32,
     /// The opaque depth target; the transparent pass tests against it.
     pub depth: Image,
     normal: Image,
     albedo: Image,
-    /// Reversed-Z depth (`f32`), one word per pixel.
+    /// Reversed-Z depth (`f32`), one word per pixel and sample.
     pub depth_buf: Buffer,
-    /// View-space normal: one word per pixel (octahedral) or four (float32).
+    /// View-space normal: one word per pixel and sample (octahedral) or four (float32).
     pub normal_buf: Buffer,
     /// Index into [`NORMAL_FORMATS`].
     pub normal_target: usize,
-    /// RGBA8 albedo + material index, one word per pixel.
+    /// RGBA8 albedo + material index, one word per pixel and sample.
     pub albedo_buf: Buffer,
 }
 
 impl Targets {
-    /// Targets for `width × height` pixels and normals at `precision` (`PRECISION_*`).
-    pub fn new(ctx: &Context, width: u32, height: u32, precision: u32) -> VkResult<Self> {
-        let n = width as u64 * height as u64;
+    /// Targets for `width × height` pixels of `samples` samples and normals at `precision`
+    /// (`PRECISION_*`).
+    pub fn new(ctx: &Context, width: u32, height: u32, precision: u32, samples: u32) -> VkResult<Self> {
+        let n = width as u64 * height as u64 * samples.max(1) as u64;
         let normal_target = normal_target(precision);
         let normal_words = Precision::from_u32(precision).gbuffer_words() as u64;
         crate::vk::memory::check_range(ctx, "G-buffer", 4 * n)?;
         crate::vk::memory::check_range(ctx, "G-buffer normals", 4 * normal_words * n)?;
+        let target = |name: &str, format: TargetFormat| match samples {
+            0 | 1 => Image::target(ctx, name, width, height, format),
+            _ => Image::multisampled_target(ctx, name, width, height, format, samples),
+        };
+        let normal_format = if samples > 1 { super::msaa::NORMAL_FORMAT } else { NORMAL_FORMATS[normal_target] };
         Ok(Self {
             width,
             height,
-            depth: Image::target(ctx, "gbuffer depth", width, height, TargetFormat::Depth32)?,
-            normal: Image::target(ctx, "gbuffer normal", width, height, NORMAL_FORMATS[normal_target])?,
-            albedo: Image::target(ctx, "gbuffer albedo", width, height, ALBEDO_FORMAT)?,
+            samples: samples.max(1),
+            depth: target("gbuffer depth", TargetFormat::Depth32)?,
+            normal: target("gbuffer normal", normal_format)?,
+            albedo: target("gbuffer albedo", ALBEDO_FORMAT)?,
             depth_buf: Buffer::storage(ctx, "gbuffer depth", 4 * n)?,
             normal_buf: Buffer::storage(ctx, "gbuffer normals", 4 * normal_words * n)?,
             normal_target,
@@ -186,13 +198,19 @@ impl Targets {
     }
 
     pub fn bytes(&self) -> u64 {
-        // The targets hold what their buffers hold.
-        2 * (self.depth_buf.size + self.normal_buf.size + self.albedo_buf.size)
+        let buffers = self.depth_buf.size + self.normal_buf.size + self.albedo_buf.size;
+        // One sample: the targets hold what their buffers hold. More: `msaa::bytes_per_sample`.
+        match self.samples {
+            1 => 2 * buffers,
+            n => buffers + n as u64 * self.width as u64 * self.height as u64 * (4 + 16 + 4),
+        }
     }
 }
 
-/// Records the G-buffer pass and the copies into the targets' buffers.
-pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Textures, camera: &Buffer, t: &Targets) -> VkResult<()> {
+/// Records the G-buffer pass and the copies into the targets' buffers, or with `msaa` the
+/// multisampled pass and its gather (`msaa.rs`); `p` is the frame's parameters.
+#[allow(clippy::too_many_arguments)]
+pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Textures, camera: &Buffer, t: &Targets, msaa: Option<&Multisampling>, p: &FrameParams) -> VkResult<()> {
     for img in [&t.normal, &t.albedo] {
         rec.transition(img, ImageUse::Undefined, ImageUse::ColourTarget);
     }
@@ -205,13 +223,20 @@ pub fn record(gpu: &Gpu, rec: &mut Recorder<'_>, geo: &Geometry, textures: &Text
     for draw in geo.draws.iter().filter(|d| d.index_count > 0) {
         let variant = draw.variant();
         let bindings: Vec<Binding<'_>> = geo.vertex_bindings(camera).chain(textures.bindings_of(draw, variant)).collect();
-        let pipe = &gpu.raster.gbuffer[t.normal_target][variant];
+        let pipe = match msaa {
+            Some(m) => &m.gbuffer[variant],
+            None => &gpu.raster.gbuffer[t.normal_target][variant],
+        };
         match (draw.indirect, &geo.indirect_args) {
             (Some(k), Some(args)) => rec.draw_indexed_indirect(pipe, &bindings, &draw.params, args, k)?,
             _ => rec.draw_indexed(pipe, &bindings, &draw.params, draw.first_index, draw.index_count)?,
         }
     }
     rec.end_rendering();
+    if let Some(m) = msaa {
+        let targets = [(&t.depth, ImageUse::DepthTarget), (&t.normal, ImageUse::ColourTarget), (&t.albedo, ImageUse::ColourTarget)];
+        return m.record_gather(rec, targets, [&t.depth_buf, &t.normal_buf, &t.albedo_buf], p);
+    }
     for img in [&t.normal, &t.albedo] {
         rec.transition(img, ImageUse::ColourTarget, ImageUse::CopySource);
     }

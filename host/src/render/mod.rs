@@ -41,6 +41,7 @@ pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
 pub mod light_types;
+pub mod msaa;
 pub mod nurbs;
 pub mod reference;
 pub mod renderer;
@@ -192,6 +193,8 @@ pub struct Settings {
     pub oit: transparent::OitVariant,
     /// Also time every dispatch, fill and copy inside each pass (`--dispatch-times`).
     pub dispatch_times: bool,
+    /// Samples per pixel of the G-buffer (`--msaa`; 1: no multisampling, nothing of `msaa.rs`).
+    pub msaa: u32,
 }
 
 /// GPU results kept for checks and statistics.
@@ -251,6 +254,10 @@ pub struct Frame {
     /// Each NURBS patch's tessellation level in the last frame, in the scene's order (adaptive
     /// levels as the GPU chose them; empty without patches).
     pub tess_levels: Vec<u32>,
+    /// Samples per pixel (`Settings::msaa`).
+    pub samples: u32,
+    /// Pixels the last frame shaded per sample (MSAA edge pixels; 0 with one sample).
+    pub edge_pixels: u32,
 }
 
 impl Frame {

@@ -34,6 +34,7 @@ pub const RASTER_TILED: Description = Description {
     knobs: &[],
     own_kernels: handles::COMPUTE,
     own_raster: handles::RASTER,
+    msaa: false,
 };
 
 /// Entries of each tile's first list.

@@ -42,6 +42,8 @@ struct Resources {
     textures: gbuffer::Textures,
     camera: Buffer,
     targets: gbuffer::Targets,
+    /// The multisampled frame's pipelines and edge list (`--msaa` above 1; `msaa.rs`).
+    msaa: Option<super::msaa::Multisampling>,
     lights: Buffer,
     lights_view: Vec<PointLight>,
     /// World-space cones and directional lights: re-transformed with the lights each frame.
@@ -67,6 +69,7 @@ impl Resources {
             textures: &self.textures,
             camera: &self.camera,
             targets: &self.targets,
+            msaa: self.msaa.as_ref(),
             lights: &self.lights,
             lights_view: &self.lights_view,
             materials: &self.materials,
@@ -85,6 +88,7 @@ impl Resources {
             ("frame".into(), self.frame.size),
         ];
         v.extend(self.tessellation.iter().flat_map(|t| t.buffers()));
+        v.extend(self.msaa.iter().flat_map(|m| m.buffers()));
         v
     }
 
@@ -94,6 +98,10 @@ impl Resources {
         let s = &self.settings;
         if !self.geometry.transparent.is_empty() && !s.technique.draws_transparency() {
             bail!("{}", transparent::refusal(s.technique, &self.geometry.transparent, &self.material_names, &self.materials_cpu));
+        }
+        if s.msaa > 1 && !s.technique.description().msaa {
+            // The preflight's refusal (`preflight::check_msaa`), for a technique changed later.
+            bail!("--msaa {}: {} shades once per pixel (it has no per-sample edge pass)", s.msaa, s.technique.name());
         }
         s.technique.create(gpu, &self.inputs())
     }
@@ -152,13 +160,18 @@ impl Renderer {
         check_view(s)?;
         let ctx = &gpu.ctx;
         check_light_count(gpu, scene.lights.len())?;
+        crate::preflight::check_msaa(&ctx.info, s.technique, s.msaa, s.width, s.height, s.normal_precision)?;
+        if s.msaa > 1 && scene.draws.iter().any(|d| gbuffer::is_transparent(d, &scene.materials)) {
+            bail!("--msaa {}: transparent materials are drawn once per pixel over the opaque frame, not per sample: render scenes with transparency at --msaa 1", s.msaa);
+        }
         let n = s.width * s.height;
         let lights_view = lights_to_view(&scene.view, scene.lights)?;
         let positions = scene.view.relative_positions(scene.positions);
         let (geometry, tessellation, indices) = super::nurbs::upload_geometry(gpu, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
         let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
-        let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code()).context("allocating the G-buffer")?;
+        let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code(), s.msaa).context("allocating the G-buffer")?;
+        let msaa = super::msaa::Multisampling::new(gpu, s.msaa, n as u64).context("creating the MSAA passes")?;
         let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
         let records = light_records(&scene.view, &lights_view, scene.spots, scene.directional)?;
         let lights = Buffer::from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
@@ -190,6 +203,7 @@ impl Renderer {
             textures,
             camera,
             targets,
+            msaa,
             lights,
             lights_view,
             spots: scene.spots.to_vec(),
@@ -247,7 +261,7 @@ impl Renderer {
                         rec.pass("tessellation", |rec| t.record(rec, &res.geometry))?;
                     }
                     match res.settings.technique.description().gbuffer {
-                        true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets)),
+                        true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets, res.msaa.as_ref(), &res.params)),
                         false => Ok(()),
                     }
                 },
@@ -331,8 +345,8 @@ impl Renderer {
     /// settings and technique.
     pub fn set_settings(&mut self, gpu: &Gpu, s: &Settings) -> Result<()> {
         let old = &self.res.settings;
-        if (s.width, s.height, s.tile_size, s.normal_precision) != (old.width, old.height, old.tile_size, old.normal_precision) {
-            bail!("a new frame size, tile size or normal encoding needs a new renderer");
+        if (s.width, s.height, s.tile_size, s.normal_precision, s.msaa) != (old.width, old.height, old.tile_size, old.normal_precision, old.msaa) {
+            bail!("a new frame size, tile size, normal encoding or sample count needs a new renderer");
         }
         check_view(s)?;
         let old = std::mem::replace(&mut self.res.settings, s.clone());
@@ -447,6 +461,11 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
         tess_levels: match &mut res.tessellation {
             Some(t) => t.levels()?,
             None => Vec::new(),
+        },
+        samples: res.targets.samples,
+        edge_pixels: match &mut res.msaa {
+            Some(m) => m.edge_pixels()?,
+            None => 0,
         },
     })
 }

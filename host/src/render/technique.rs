@@ -58,6 +58,9 @@ pub struct FrameInputs<'a> {
     pub camera: &'a Buffer,
     /// G-buffer targets and their buffer copies.
     pub targets: &'a Targets,
+    /// The multisampled frame's edge list and passes (`--msaa` above 1, `msaa.rs`): a technique
+    /// whose `Description::msaa` is set shades the listed edge pixels per sample.
+    pub msaa: Option<&'a super::msaa::Multisampling>,
     /// View-space lights, on the GPU and (for host-side builds) on the CPU.
     pub lights: &'a Buffer,
     pub lights_view: &'a [PointLight],
@@ -136,6 +139,10 @@ pub struct Description {
     /// `gpu::Kernels`): `tests/spirv_val.rs` checks them against the modules.
     pub own_kernels: &'static [Kernel<()>],
     pub own_raster: &'static [RasterKernel<()>],
+    /// Whether it shades the edge pixels of a multisampled G-buffer per sample (`--msaa N`,
+    /// `render/msaa.rs`: [`FrameInputs::msaa`] is then set and its `record` adds the edge pass);
+    /// `--msaa` above 1 is refused in one line for the others.
+    pub msaa: bool,
 }
 
 /// How a technique meets a scene with transparent draws.

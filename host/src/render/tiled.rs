@@ -26,6 +26,7 @@ pub const TILED: Description = Description {
     knobs: &[],
     own_kernels: &[],
     own_raster: &[],
+    msaa: false,
 };
 
 pub const TILED_25D: Description = Description {

@@ -54,6 +54,10 @@ pub struct DeviceInfo {
     /// The driver reports what it compiled each kernel to (`VK_KHR_pipeline_executable_properties`:
     /// registers, sizes; `vk::kernel_stats`).
     pub kernel_statistics: bool,
+    /// Sample counts (bit `N` for `N` samples) a multisampled G-buffer can have here: counts the
+    /// device renders and samples for float and depth targets alike, with its standard sample
+    /// locations (`--msaa`; 1 alone where it has none of them). Vulkan requires 1 and 4.
+    pub msaa_sample_counts: u32,
 }
 
 /// Bytes a storage-buffer binding stays below on every device: `2^31 − 1`. On an NVIDIA H200
@@ -117,6 +121,18 @@ fn kind_name(t: vk::PhysicalDeviceType) -> (&'static str, u32) {
 
 fn version(v: u32) -> String {
     format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+}
+
+/// [`DeviceInfo::msaa_sample_counts`] from the device's limits.
+fn msaa_sample_counts(l: &vk::PhysicalDeviceLimits) -> u32 {
+    if l.standard_sample_locations != vk::TRUE {
+        return 1;
+    }
+    let all = l.framebuffer_color_sample_counts
+        & l.framebuffer_depth_sample_counts
+        & l.sampled_image_color_sample_counts
+        & l.sampled_image_depth_sample_counts;
+    all.as_raw() | 1
 }
 
 /// A Vulkan fixed-size string (NUL-terminated within its array; a missing NUL gives the whole
@@ -192,6 +208,7 @@ fn inspect(instance: &ash::Instance, pd: vk::PhysicalDevice) -> VkResult<(Device
         graphics_family: gfx.unwrap_or(0) as u32,
         async_compute_family: async_compute.map(|f| f as u32),
         kernel_statistics,
+        msaa_sample_counts: msaa_sample_counts(&p.limits),
     };
     let mut missing = Vec::new();
     if p.api_version < vk::API_VERSION_1_3 {

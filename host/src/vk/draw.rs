@@ -49,6 +49,8 @@ pub enum ImageUse {
     DepthTarget,
     /// Read by a copy into a buffer.
     CopySource,
+    /// Read texel by texel by compute kernels (sampled images, e.g. multisampled targets).
+    KernelRead,
 }
 
 impl ImageUse {
@@ -66,6 +68,7 @@ impl ImageUse {
                 vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
             ),
             Self::CopySource => (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ),
+            Self::KernelRead => (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
         }
     }
 }

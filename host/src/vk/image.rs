@@ -13,6 +13,8 @@ pub struct Image {
     allocation: Option<Allocation>,
     pub format: vk::Format,
     pub extent: vk::Extent2D,
+    /// Samples per pixel (1 but for multisampled targets).
+    pub samples: u32,
     pub name: String,
 }
 
@@ -23,8 +25,23 @@ impl Image {
         Self::new_2d(ctx, name, width, height, format.raw(), usage | vk::ImageUsageFlags::TRANSFER_SRC)
     }
 
+    /// A render target of `format` with `samples` samples per pixel (a count the device supports
+    /// for it), drawn into, then read sample by sample by kernels (`ImageUse::KernelRead`).
+    pub fn multisampled_target(ctx: &Context, name: &str, width: u32, height: u32, format: super::raster::TargetFormat, samples: u32) -> VkResult<Self> {
+        let usage = if format.is_depth() { vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT } else { vk::ImageUsageFlags::COLOR_ATTACHMENT };
+        Self::with_samples(ctx, name, width, height, format.raw(), usage | vk::ImageUsageFlags::SAMPLED, samples)
+    }
+
     /// A device-local, optimally tiled 2D image with one mip level and a colour or depth view.
     pub fn new_2d(ctx: &Context, name: &str, width: u32, height: u32, format: vk::Format, usage: vk::ImageUsageFlags) -> VkResult<Self> {
+        Self::with_samples(ctx, name, width, height, format, usage, 1)
+    }
+
+    fn with_samples(ctx: &Context, name: &str, width: u32, height: u32, format: vk::Format, usage: vk::ImageUsageFlags, samples: u32) -> VkResult<Self> {
+        let sample_flags = vk::SampleCountFlags::from_raw(samples);
+        if !samples.is_power_of_two() || samples > 64 {
+            return Err(VkError::InvalidImage { name: name.into(), what: format!("{samples} samples per pixel (a power of two up to 64)") });
+        }
         let limit = unsafe { ctx.instance.raw.get_physical_device_properties(ctx.physical) }.limits.max_image_dimension2_d;
         if width == 0 || height == 0 || width > limit || height > limit {
             return Err(VkError::InvalidImage { name: name.into(), what: format!("size {width}x{height} outside 1..={limit}") });
@@ -36,7 +53,7 @@ impl Image {
             .extent(vk::Extent3D { width, height, depth: 1 })
             .mip_levels(1)
             .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
+            .samples(sample_flags)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
@@ -64,6 +81,7 @@ impl Image {
             allocation: Some(allocation),
             format,
             extent: vk::Extent2D { width, height },
+            samples,
             name: name.into(),
         };
         let a = this.allocation.as_ref().expect("just allocated");

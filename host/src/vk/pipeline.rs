@@ -9,6 +9,7 @@
 //! does see, that it reports two unordered dispatches and that this barrier orders them.
 use super::context::Context;
 use super::error::{CallContext, VkError, VkResult};
+use super::image::Image;
 use super::memory::{barrier, Buffer};
 use super::profiler::Profiler;
 use ash::vk;
@@ -111,11 +112,12 @@ pub struct ComputePipeline<P> {
 impl<P: Pod> ComputePipeline<P> {
     pub fn new(ctx: &Context, module: &ShaderModule, kernel: Kernel<P>) -> VkResult<Self> {
         let d = &ctx.device;
-        let bindings: Vec<_> = (0..kernel.storage_buffers)
+        let (buffers, images) = (kernel.storage_buffers, kernel.sampled_images);
+        let bindings: Vec<_> = (0..buffers + images)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(if b < buffers { vk::DescriptorType::STORAGE_BUFFER } else { vk::DescriptorType::SAMPLED_IMAGE })
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -220,9 +222,9 @@ impl Recorder<'_> {
             return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("dispatch of {groups:?} workgroups exceeds {limit} per axis") });
         }
         if groups.contains(&0) {
-            return self.check_bindings(pipe, buffers);
+            return self.check_bindings(pipe, buffers, &[]);
         }
-        self.bind(pipe, buffers, params)?;
+        self.bind(pipe, buffers, &[], params)?;
         let part = self.begin_part(pipe.kernel.entry);
         unsafe { self.ctx.device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]) };
         dispatch_barrier(self.ctx, self.cmd);
@@ -236,7 +238,7 @@ impl Recorder<'_> {
         if 4 * (offset as u64 + 3) > args.size {
             return Err(VkError::Kernel { entry: pipe.kernel.entry, what: format!("indirect arguments at word {offset} past the end of {}", args.name) });
         }
-        self.bind(pipe, buffers, params)?;
+        self.bind(pipe, buffers, &[], params)?;
         let part = self.begin_part(pipe.kernel.entry);
         unsafe { self.ctx.device.cmd_dispatch_indirect(self.cmd, args.raw, 4 * offset as u64) };
         dispatch_barrier(self.ctx, self.cmd);
@@ -249,24 +251,41 @@ impl Recorder<'_> {
         (pipe.kernel.invocations() / self.ctx.info.max_subgroup_size.max(1)).max(1)
     }
 
-    fn check_bindings<P>(&self, pipe: &ComputePipeline<P>, buffers: &[&Buffer]) -> VkResult<()> {
+    fn check_bindings<P>(&self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], images: &[&Image]) -> VkResult<()> {
         let k = &pipe.kernel;
-        if buffers.len() != k.storage_buffers as usize {
+        if buffers.len() != k.storage_buffers as usize || images.len() != k.sampled_images as usize {
             return Err(VkError::Kernel {
                 entry: k.entry,
-                what: format!("binds {} storage buffers, {} given", k.storage_buffers, buffers.len()),
+                what: format!("binds {} storage buffers and {} sampled images, {} and {} given", k.storage_buffers, k.sampled_images, buffers.len(), images.len()),
             });
         }
         Ok(())
     }
 
+    /// A linear dispatch over `n` elements ([`Recorder::dispatch_linear`]) of a kernel that also
+    /// reads `images` (in use `ImageUse::KernelRead`) as sampled images after its buffers.
+    pub fn dispatch_linear_reading<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], images: &[&Image], params: &P, n: u32) -> VkResult<()> {
+        let groups = fold(n.div_ceil(pipe.kernel.invocations()));
+        if groups.contains(&0) {
+            return self.check_bindings(pipe, buffers, images);
+        }
+        self.bind(pipe, buffers, images, params)?;
+        let part = self.begin_part(pipe.kernel.entry);
+        unsafe { self.ctx.device.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]) };
+        dispatch_barrier(self.ctx, self.cmd);
+        self.end_part(part);
+        Ok(())
+    }
+
     /// Binds `pipe`, pushes `buffers` at bindings `0..n` and `params` as push constants.
-    fn bind<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], params: &P) -> VkResult<()> {
-        self.check_bindings(pipe, buffers)?;
+    fn bind<P: Pod>(&mut self, pipe: &ComputePipeline<P>, buffers: &[&Buffer], images: &[&Image], params: &P) -> VkResult<()> {
+        self.check_bindings(pipe, buffers, images)?;
         let d = &self.ctx.device;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
             buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
-        let writes: Vec<_> = infos
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> =
+            images.iter().map(|i| [vk::DescriptorImageInfo::default().image_view(i.view).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]).collect();
+        let mut writes: Vec<_> = infos
             .iter()
             .enumerate()
             .map(|(i, info)| {
@@ -276,6 +295,12 @@ impl Recorder<'_> {
                     .buffer_info(info)
             })
             .collect();
+        writes.extend(image_infos.iter().enumerate().map(|(i, info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_binding((buffers.len() + i) as u32)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(info)
+        }));
         unsafe {
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipe.raw);
             if !writes.is_empty() {

@@ -96,6 +96,17 @@ impl<P> GraphicsPipeline<P> {
     /// A pipeline drawing `kernel` into colour targets of the given formats and blending, and a
     /// depth target.
     pub fn blended(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest) -> VkResult<Self> {
+        Self::with_samples(ctx, module, name, kernel, colours, depth, 1)
+    }
+
+    /// [`GraphicsPipeline::new`] for targets of `samples` samples per pixel (the fragment shader
+    /// runs once per pixel and primitive; depth is tested per sample).
+    pub fn multisampled(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[TargetFormat], depth: DepthTest, samples: u32) -> VkResult<Self> {
+        let replace: Vec<(TargetFormat, Blend)> = colours.iter().map(|&c| (c, Blend::Replace)).collect();
+        Self::with_samples(ctx, module, name, kernel, &replace, depth, samples)
+    }
+
+    fn with_samples(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest, samples: u32) -> VkResult<Self> {
         let d = &ctx.device;
         let binding = |b: u32, ty: vk::DescriptorType, stage: vk::ShaderStageFlags| {
             vk::DescriptorSetLayoutBinding::default().binding(b).descriptor_type(ty).descriptor_count(1).stage_flags(stage)
@@ -136,7 +147,7 @@ impl<P> GraphicsPipeline<P> {
             .cull_mode(vk::CullModeFlags::NONE)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::from_raw(samples));
         let (compare, write) = match depth {
             DepthTest::NearestWrites => (vk::CompareOp::GREATER, true),
             DepthTest::EqualReadOnly => (vk::CompareOp::EQUAL, false),

@@ -1,0 +1,168 @@
+//! MSAA (`--msaa N`, `shaders::msaa`) on the local device (lavapipe in CI, whose G-buffers take
+//! 4 samples; every count the device has elsewhere), validation on:
+//! - `deferred --msaa N` against the same view rendered at `N` times the pixels (an `a × b` grid
+//!   per pixel) and box-filtered in linear colour: within the stated tolerance, and with at most
+//!   half as many pixels far off as the one-sample frame;
+//! - the knob reaches the kernels: the frame lists edge pixels, and only those (within 1/255) change;
+//! - only what the frame calls for: `--msaa 1` allocates no buffer of MSAA and one G-buffer plane,
+//!   `--msaa N` `N` planes and the edge list;
+//! - one-line refusals: counts outside 1/2/4/8 or not on the device, techniques without a
+//!   per-sample edge pass, scenes with transparent materials.
+mod common;
+use common::pixels::{channel_diff, lit};
+use common::render::{city, frame, render_error, settings};
+use host::gpu::Gpu;
+use host::render::{Frame, Settings, Technique};
+use host::scene::lights;
+use shaders::layout::PointLight;
+use shaders::lighting::{decode_srgb8, encode_srgb8};
+
+/// The sub-pixel grid of the `N`× supersampled reference: `N` = columns × rows.
+fn grid_of(samples: u32) -> (u32, u32) {
+    match samples {
+        2 => (2, 1),
+        4 => (2, 2),
+        8 => (4, 2),
+        _ => (1, 1),
+    }
+}
+
+/// The counts to test here: those of `--msaa` the device renders.
+/// 4 is among them on every device (Vulkan requires it for colour, depth and sampled images).
+fn counts(gpu: &Gpu) -> Vec<u32> {
+    let here: Vec<u32> = shaders::msaa::SAMPLE_COUNTS.into_iter().filter(|&n| n > 1 && gpu.ctx.info.msaa_sample_counts & n != 0).collect();
+    assert!(here.contains(&4), "{} offers {:#x}: Vulkan requires 4 samples", gpu.ctx.info.name, gpu.ctx.info.msaa_sample_counts);
+    here
+}
+
+/// `pixels` of a `(w·a) × (h·b)` frame box-filtered to `w × h`: the mean of each pixel's `a × b`
+/// sub-pixels in linear colour, encoded as sRGB8 as the frames are.
+fn box_filtered(pixels: &[u32], w: u32, h: u32, (a, b): (u32, u32)) -> Vec<u32> {
+    let big_w = w * a;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let sum = (0..a * b).map(|k| decode_srgb8(pixels[((y * b + k / a) * big_w + x * a + k % a) as usize])).fold(glam::Vec3::ZERO, |s, c| s + c);
+            encode_srgb8(sum / (a * b) as f32)
+        })
+        .collect()
+}
+
+/// Mean over pixels of the largest channel difference (in 1/255), and the share of pixels more
+/// than `band`/255 off.
+fn error(a: &[u32], b: &[u32], band: u32) -> (f64, f64) {
+    let diffs: Vec<u32> = a.iter().zip(b).map(|(&x, &y)| channel_diff(x, y)).collect();
+    let mean = diffs.iter().map(|&d| d as f64).sum::<f64>() / diffs.len() as f64;
+    let outside = diffs.iter().filter(|&&d| d > band).count() as f64 / diffs.len() as f64;
+    (mean, outside)
+}
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+fn city_lights() -> (host::scene::Scene, Vec<PointLight>) {
+    let scene = city();
+    let l = lights::uniform(&scene, 1000, 7).unwrap();
+    (scene, l)
+}
+
+fn with_msaa(technique: Technique, samples: u32) -> Settings {
+    Settings { msaa: samples, read_back: false, ..settings(W, H, technique) }
+}
+
+/// The tolerance against the supersampled reference: the mean of the largest channel difference
+/// at most this (in 1/255). The two sample the pixel at different points (MSAA at Vulkan's
+/// standard locations, the reference on a regular grid), so edge pixels differ by a coverage
+/// step (1/N of the contrast) where an edge passes between the points; interior pixels are
+/// shaded once at the centre against the reference's mean of N points.
+const MEAN_TOLERANCE: f64 = 1.0;
+/// And the share of pixels more than [`BAND`]/255 off at most this.
+const OUTSIDE_TOLERANCE: f64 = 0.02;
+const BAND: u32 = 16;
+
+#[test]
+fn deferred_msaa_matches_the_supersampled_reference() {
+    let gpu = common::gpu();
+    let (scene, l) = city_lights();
+    for samples in counts(&gpu) {
+        let (a, b) = grid_of(samples);
+        let big = frame(&gpu, &scene, &l, &settings(W * a, H * b, Technique::Deferred));
+        let reference = box_filtered(&big.pixels, W, H, (a, b));
+        assert!(lit(&reference) * 10 > reference.len(), "the reference should be lit");
+        let one = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, 1));
+        let ms = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, samples));
+        let (one_mean, one_out) = error(&one.pixels, &reference, BAND);
+        let (ms_mean, ms_out) = error(&ms.pixels, &reference, BAND);
+        println!("{samples} samples: edge pixels {} of {}; against {a}x{b} supersampling: mean {ms_mean:.3}/255, {:.2} % past {BAND}/255 (one sample: {one_mean:.3}/255, {:.2} %)", ms.edge_pixels, W * H, 100.0 * ms_out, 100.0 * one_out);
+        assert!(ms_mean <= MEAN_TOLERANCE && ms_out <= OUTSIDE_TOLERANCE, "{samples} samples: mean {ms_mean:.3}/255, {:.2} % of pixels past {BAND}/255", 100.0 * ms_out);
+        // Aliasing is the pixels far off: at most half as many as with one sample (interior
+        // pixels are shaded once either way, so the mean improves less).
+        assert!(ms_mean < one_mean && ms_out * 2.0 < one_out, "{samples} samples: not closer to the reference than one sample ({ms_mean:.3} vs {one_mean:.3}, {ms_out:.4} vs {one_out:.4})");
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The knob reaches the kernels: edges are found and shaded per sample, and no other pixel moves
+/// by more than 1/255 (they are shaded once, from sample 0's depth instead of the centre's).
+#[test]
+fn msaa_changes_the_edge_pixels_and_only_those() {
+    let gpu = common::gpu();
+    let (scene, l) = city_lights();
+    let one = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, 1));
+    assert_eq!((one.samples, one.edge_pixels), (1, 0));
+    for samples in counts(&gpu) {
+        let ms = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, samples));
+        let changed = one.pixels.iter().zip(&ms.pixels).filter(|(&x, &y)| channel_diff(x, y) > 1).count();
+        assert_eq!(ms.samples, samples);
+        assert!(ms.edge_pixels > 0 && (ms.edge_pixels as usize) < ms.pixels.len() / 2, "{samples} samples: {} edge pixels", ms.edge_pixels);
+        assert!(changed > 0 && changed <= ms.edge_pixels as usize, "{samples} samples: {changed} pixels changed, {} edge pixels", ms.edge_pixels);
+    }
+    common::assert_clean(&gpu);
+}
+
+fn bytes(f: &Frame, name: &str) -> Option<u64> {
+    f.buffers.iter().find(|(n, _)| n == name).map(|b| b.1)
+}
+
+/// Only what the frame calls for: one sample allocates no MSAA buffer; `N` samples `N` planes
+/// of the G-buffer (36 B per sample with 2×16-bit normals: 24 B of targets, 12 B of buffers) and
+/// the edge list (one word per pixel and a 16-byte header).
+#[test]
+fn msaa_memory_is_allocated_only_for_more_than_one_sample() {
+    let gpu = common::gpu();
+    let (scene, l) = city_lights();
+    let n = (W * H) as u64;
+    let one = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, 1));
+    assert_eq!(bytes(&one, "MSAA edge list"), None);
+    assert_eq!(bytes(&one, "gbuffer"), Some(2 * 12 * n));
+    for samples in counts(&gpu) {
+        let ms = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, samples));
+        assert_eq!(bytes(&ms, "gbuffer"), Some(36 * n * samples as u64), "{samples} samples");
+        assert_eq!(bytes(&ms, "MSAA edge list"), Some(4 * n + 16), "{samples} samples");
+        assert_eq!(host::render::msaa::bytes_per_sample(shaders::octahedral::Precision::Oct16), 36);
+    }
+}
+
+#[test]
+fn unsupported_msaa_settings_are_refused_in_one_line() {
+    let gpu = common::gpu();
+    let (scene, l) = city_lights();
+    let p = shaders::octahedral::Precision::Oct16;
+    let one_line = |e: String, needle: &str| {
+        assert!(!e.contains('\n') && e.contains(needle), "expected one line naming {needle:?}: {e}");
+    };
+    one_line(render_error(&gpu, &scene, &l, p, &with_msaa(Technique::Deferred, 3)), "--msaa 3");
+    one_line(render_error(&gpu, &scene, &l, p, &with_msaa(Technique::Deferred, 16)), "--msaa 16");
+    for n in [2, 4, 8].into_iter().filter(|&n| gpu.ctx.info.msaa_sample_counts & n == 0) {
+        one_line(render_error(&gpu, &scene, &l, p, &with_msaa(Technique::Deferred, n)), "samples per pixel only");
+    }
+    let Some(&n) = counts(&gpu).first() else { return };
+    for &t in Technique::ALL.iter().filter(|t| !t.description().msaa) {
+        one_line(render_error(&gpu, &scene, &l, p, &with_msaa(t, n)), t.name());
+    }
+    // Transparent materials are drawn once per pixel: refused with MSAA.
+    let mut glass = scene.clone();
+    glass.materials[0].opacity = 0.5;
+    one_line(render_error(&gpu, &glass, &l, p, &with_msaa(Technique::Deferred, n)), "transparent");
+    common::assert_clean(&gpu);
+}
