@@ -120,6 +120,29 @@ fn msaa_changes_the_edge_pixels_and_only_those() {
     common::assert_clean(&gpu);
 }
 
+/// Every technique with an edge pass equals `deferred` at the same sample count within 1/255,
+/// on the city (edges against the sky and between buildings) and with coincident lights that
+/// overflow the tiled list (several rounds).
+#[test]
+fn every_msaa_technique_equals_deferred_at_the_same_samples() {
+    let gpu = common::gpu();
+    let (scene, l) = city_lights();
+    let crowd: Vec<PointLight> = l.iter().copied().chain((0..1500).map(|_| l[0])).collect();
+    for samples in counts(&gpu) {
+        for lights in [&l, &crowd] {
+            let reference = frame(&gpu, &scene, lights, &with_msaa(Technique::Deferred, samples));
+            assert!(reference.edge_pixels > 0);
+            for &t in Technique::ALL.iter().filter(|&&t| t != Technique::Deferred && t.description().msaa) {
+                let f = frame(&gpu, &scene, lights, &Settings { tile_size: 16, ..with_msaa(t, samples) });
+                let worst = common::pixels::worst_channel(&reference.pixels, &f.pixels);
+                assert!(worst <= 1, "{} at {samples} samples, {} lights: differs from deferred by {worst}/255", t.name(), lights.len());
+                assert_eq!(f.edge_pixels, reference.edge_pixels, "{}: the same edges", t.name());
+            }
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
 fn bytes(f: &Frame, name: &str) -> Option<u64> {
     f.buffers.iter().find(|(n, _)| n == name).map(|b| b.1)
 }

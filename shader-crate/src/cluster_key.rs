@@ -232,7 +232,8 @@ mod host {
                 log_growth,
                 inv_log_growth: 1.0 / log_growth,
                 tan_half_fov_y: tan_half,
-                _pad: [0; 2],
+                samples: 1,
+                _pad: 0,
             };
             // Rounding in exp() may leave near_S a hair below far: add slices until covered.
             while grid.slice_near_depth(grid.num_slices) < far {

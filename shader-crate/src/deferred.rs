@@ -66,7 +66,7 @@ specular_entries! {
         #[spirv(workgroup_id)] wg: UVec3,
         #[spirv(num_workgroups)] nwg: UVec3,
         #[spirv(local_invocation_index)] local: u32,
-        #[spirv(push_constant)] m: &MsaaParams,
+        #[spirv(push_constant)] p: &FrameParams,
         #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
         #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
@@ -77,8 +77,7 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] edges: &[u32],
     ) {
-        let m = &crate::light_types::specialise(m, light_types);
-        let p = &m.frame;
+        let p = &crate::light_types::specialise(p, light_types);
         let slot = linear_index(wg, nwg, local);
         if slot >= edges[0] {
             return;
@@ -94,6 +93,6 @@ specular_entries! {
             let touching = if view == VIEW_HEATMAP { lights_meeting(n, lights, |_, _| {}, move |c, r| lighting::in_range(c, r, pos)) } else { 0 };
             (sum, touching)
         };
-        frame[i as usize] = msaa::shade_edge_pixel(p, m.samples, i, bounds, depth, normals, albedo, materials, shade);
+        frame[i as usize] = msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
     }
 }

@@ -89,13 +89,13 @@ pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustere
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
 /// Its MSAA edge pass (`msaa.rs` step 5): the shading buffers and the edge list.
-pub const SHADE_EDGES_DEFERRED: [Kernel<MsaaParams>; 2] =
+pub const SHADE_EDGES_DEFERRED: [Kernel<FrameParams>; 2] =
     [linear("deferred::shade_edges_deferred_diffuse", 8), linear("deferred::shade_edges_deferred_specular", 8)];
 
 // MSAA (`msaa.rs`).
 /// The samples of the multisampled G-buffer into the buffers, and the edge list: depth, normals,
 /// albedo, edges; the three targets as sampled images.
-pub const MSAA_GATHER: Kernel<MsaaParams> = linear("msaa::msaa_gather", 4).with_sampled_images(3);
+pub const MSAA_GATHER: Kernel<FrameParams> = linear("msaa::msaa_gather", 4).with_sampled_images(3);
 /// The edge pass's indirect workgroup counts: edges.
 pub const MSAA_EDGE_ARGS: Kernel<()> = Kernel::new("msaa::msaa_edge_args", 1, [1, 1, 1], false);
 /// Resolve of the transparent pass: heads, nodes, frame, counters (`transparency`).

@@ -48,7 +48,10 @@ pub struct ClusterGrid {
     pub inv_log_growth: f32,
     /// `tan(θ)`.
     pub tan_half_fov_y: f32,
-    pub _pad: [u32; 2],
+    /// Samples per pixel of the G-buffer (`--msaa`, `crate::msaa`): 1 but for multisampled frames,
+    /// whose G-buffer buffers hold one plane of `width × height` entries per sample.
+    pub samples: u32,
+    pub _pad: u32,
 }
 const _: () = assert!(core::mem::size_of::<ClusterGrid>() == 64);
 
@@ -422,19 +425,6 @@ pub struct TiledParams {
 }
 const _: () = assert!(core::mem::size_of::<TiledParams>() == 112);
 const _: () = assert!(core::mem::size_of::<TiledParams>() <= MAX_PUSH_CONSTANT_BYTES);
-
-/// Push constants of the MSAA passes (`crate::msaa`): the frame and its samples per pixel.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(not(target_arch = "spirv"), derive(Pod, Zeroable))]
-pub struct MsaaParams {
-    pub frame: FrameParams,
-    /// Samples per pixel (`crate::msaa::SAMPLE_COUNTS`).
-    pub samples: u32,
-    pub _pad: [u32; 3],
-}
-const _: () = assert!(core::mem::size_of::<MsaaParams>() == 112);
-const _: () = assert!(core::mem::size_of::<MsaaParams>() <= MAX_PUSH_CONSTANT_BYTES);
 
 /// Push constants of the Forward+ raster passes (`raster_forward.rs`): the frame and the draw;
 /// `frame.count` carries the draw's index (the pre-pass records each pixel's winning draw).

@@ -111,7 +111,7 @@ macro_rules! carries_frame {
         })*
     };
 }
-carries_frame!(crate::layout::TiledParams, crate::layout::BvhAssignParams, crate::layout::ForwardParams, crate::layout::TransparentParams, crate::layout::MsaaParams);
+carries_frame!(crate::layout::TiledParams, crate::layout::BvhAssignParams, crate::layout::ForwardParams, crate::layout::TransparentParams);
 
 /// `p` with its frame's light-type bits replaced by the entry's specialization constant
 /// `light_types` (module docs): the first line of every light-typed entry, so the kernel never

@@ -174,18 +174,59 @@ pub fn shade_edge_pixel(
     let mut sum = Vec3::ZERO;
     let mut s = 0;
     while s < samples {
-        let z = depth[(s * p.count + i) as usize];
-        let word = if reconstruct::is_background(z) {
-            shading::BACKGROUND_RGBA8
+        sum += if is_sky(p, i, s, depth) {
+            background()
         } else {
             let surface = sample_surface(p, samples, i, s, depth, normals, albedo, materials);
             let (radiance, lights) = shade(&surface);
-            shading::output_colour(p, bounds, i, &surface, radiance, lights)
+            sample_colour(p, bounds, i, &surface, radiance, lights)
         };
-        sum += lighting::decode_srgb8(word);
         s += 1;
     }
+    resolve(sum, samples)
+}
+
+/// Whether sample `s` of pixel `i` shows no geometry.
+#[inline]
+pub fn is_sky(p: &FrameParams, i: u32, s: u32, depth: &[f32]) -> bool {
+    reconstruct::is_background(depth[(s * p.count + i) as usize])
+}
+
+/// The background's display colour, linear (a sky sample's share of an edge pixel).
+#[inline]
+pub fn background() -> Vec3 {
+    lighting::decode_srgb8(shading::BACKGROUND_RGBA8)
+}
+
+/// A shaded sample's display colour, linear: `shading::output_colour` decoded (so the mean of
+/// the samples is taken over what one-sample frames show).
+#[inline]
+pub fn sample_colour(p: &FrameParams, bounds: &[f32], i: u32, surface: &Surface, radiance: Vec3, lights: u32) -> Vec3 {
+    lighting::decode_srgb8(shading::output_colour(p, bounds, i, surface, radiance, lights))
+}
+
+/// The pixel of `samples` samples whose display colours add up to `sum`: their mean, sRGB8.
+#[inline]
+pub fn resolve(sum: Vec3, samples: u32) -> u32 {
     lighting::encode_srgb8(sum * (1.0 / samples.max(1) as f32))
+}
+
+/// Whether pixel `i` of a multisampled G-buffer's planes is an edge pixel ([`is_edge`]).
+#[inline]
+pub fn pixel_is_edge(p: &FrameParams, i: u32, depth: &[f32], normals: &[u32], albedo: &[u32]) -> bool {
+    let g = p.grid;
+    let words = octahedral::Precision::from_u32(p.normal_precision).gbuffer_words();
+    // `move`: the closure holds values, not pointers to this function's locals (a struct of
+    // such pointers is not valid SPIR-V for Vulkan).
+    let (count, precision, samples) = (p.count, p.normal_precision, g.samples);
+    let key = move |s: u32| {
+        let e = s * count + i;
+        let w = if words == 4 { [normals[4 * e as usize], normals[4 * e as usize + 1], normals[4 * e as usize + 2]] } else { [normals[e as usize], 0, 0] };
+        let (ox, oy) = sample_location(samples, s);
+        let ray = reconstruct::sample_position(&g, i % g.width, i / g.width, ox, oy, 1.0);
+        SampleKey { depth: depth[e as usize], normal: decoded_normal(precision, w), albedo: albedo[e as usize], ray }
+    };
+    is_edge(g.near, samples, key)
 }
 
 /// The G-buffer albedo word of a fetched `RGBA8_UNORM` texel (the inverse of the target's
@@ -239,7 +280,7 @@ pub fn msaa_gather(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
-    #[spirv(push_constant)] m: &MsaaParams,
+    #[spirv(push_constant)] p: &FrameParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &mut [f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &mut [u32],
@@ -248,7 +289,6 @@ pub fn msaa_gather(
     #[spirv(descriptor_set = 0, binding = 5)] normal_samples: &SamplesF32,
     #[spirv(descriptor_set = 0, binding = 6)] albedo_samples: &SamplesF32,
 ) {
-    let p = &m.frame;
     let i = linear_index(wg, nwg, local);
     if i >= p.count {
         return;
@@ -257,7 +297,7 @@ pub fn msaa_gather(
     let at = IVec2::new((i % g.width) as i32, (i / g.width) as i32);
     let words = octahedral::Precision::from_u32(p.normal_precision).gbuffer_words();
     let mut s = 0;
-    while s < m.samples {
+    while s < p.grid.samples {
         let e = (s * p.count + i) as usize;
         let z: Vec4 = depth_samples.fetch_with(at, sample_with::sample_index(s as i32));
         let t: Vec4 = normal_samples.fetch_with(at, sample_with::sample_index(s as i32));
@@ -275,18 +315,7 @@ pub fn msaa_gather(
         }
         s += 1;
     }
-    // `move`: the closure holds values, not pointers to this function's locals (a struct of
-    // such pointers is not valid SPIR-V for Vulkan).
-    let (count, precision, samples, grid) = (p.count, p.normal_precision, m.samples, *g);
-    let (normals, depth, albedo) = (&*normals, &*depth, &*albedo);
-    let key = move |s: u32| {
-        let e = s * count + i;
-        let w = if words == 4 { [normals[4 * e as usize], normals[4 * e as usize + 1], normals[4 * e as usize + 2]] } else { [normals[e as usize], 0, 0] };
-        let (ox, oy) = sample_location(samples, s);
-        let ray = reconstruct::sample_position(&grid, i % grid.width, i / grid.width, ox, oy, 1.0);
-        SampleKey { depth: depth[e as usize], normal: decoded_normal(precision, w), albedo: albedo[e as usize], ray }
-    };
-    if is_edge(g.near, m.samples, key) {
+    if pixel_is_edge(p, i, depth, normals, albedo) {
         let slot = edges[0].fetch_add(1);
         edges[(EDGE_HEADER_WORDS + slot) as usize] = i;
     }

@@ -405,7 +405,10 @@ pub fn tile_widening(words: &[u32], tile: u32) -> (u32, u32) {
 /// depth bounds, frustum and (`mode == MODE_TILED_25D`) 2.5D mask. The bounds also span `widen`
 /// (view-distance bits, [`tile_widening`]: Forward+'s transparent fragments; [`NO_WIDENING`]
 /// otherwise), and a widened tile's 2.5D mask keeps every cell (the mask knows opaque pixels
-/// only). Called by every invocation of the workgroup (it synchronises).
+/// only). With a multisampled G-buffer (`ClusterGrid::samples` above 1, `crate::msaa`) the bounds
+/// and the mask span every sample of the tile's pixels (planes `s·n + i` of `depth`), so the list
+/// serves the edge pixels' samples too; `TilePixels` is sample 0's. Called by every invocation of
+/// the workgroup (it synchronises).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &ClusterGrid, tx: u32, ty: u32, mode: u32, depth: &[f32], widen: (u32, u32)) -> (TilePixels, TileCull) {
@@ -413,6 +416,7 @@ pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &Cluster
     let mut px = TilePixels { pixels: [NO_PIXEL; 4], dist: [0.0; 4], geo: [0; 4] };
     // Bits of positive floats order like the floats.
     let (mut lo, mut hi) = widen;
+    let plane = g.width * g.height;
     let mut slot = 0;
     while slot < MAX_PIXELS_PER_INVOCATION {
         let i = slot_pixel(g, tx, ty, li, slot);
@@ -423,6 +427,16 @@ pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &Cluster
             px.geo[slot as usize] = 1;
             lo = if d.to_bits() < lo { d.to_bits() } else { lo };
             hi = if d.to_bits() > hi { d.to_bits() } else { hi };
+        }
+        let mut sample = 1;
+        while i != NO_PIXEL && sample < g.samples {
+            let z = depth[(sample * plane + i) as usize];
+            if !reconstruct::is_background(z) {
+                let d = reconstruct::distance_from_depth(g.near, z).to_bits();
+                lo = if d < lo { d } else { lo };
+                hi = if d > hi { d } else { hi };
+            }
+            sample += 1;
         }
         slot += 1;
     }
@@ -435,8 +449,17 @@ pub fn tile_bounds<C: Coop, S: SharedU32 + ?Sized>(c: &C, s: &mut S, g: &Cluster
         let mut mine = 0;
         let mut slot = 0;
         while slot < MAX_PIXELS_PER_INVOCATION {
+            let i = px.pixels[slot as usize];
             if px.geo[slot as usize] != 0 {
                 mine |= 1u32 << depth_cell(&cells, px.dist[slot as usize]);
+            }
+            let mut sample = 1;
+            while i != NO_PIXEL && sample < g.samples {
+                let z = depth[(sample * plane + i) as usize];
+                if !reconstruct::is_background(z) {
+                    mine |= 1u32 << depth_cell(&cells, reconstruct::distance_from_depth(g.near, z));
+                }
+                sample += 1;
             }
             slot += 1;
         }

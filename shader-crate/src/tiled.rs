@@ -9,7 +9,10 @@
 //!    [`LIGHTS_PER_INVOCATION`] lights: [`TileCull::keep_batch`]) and appends the survivors, in
 //!    index order, through a workgroup prefix sum to the tile-local list in workgroup memory
 //!    (Olsson & Assarsson 2011, "Tiled Shading", JGT; Harada et al. 2012).
-//! 5. **Shading** — every pixel sums its lights over the list ([`shading::shade_lights`]).
+//! 5. **Shading** — every pixel sums its lights over the list ([`shading::shade_lights`]); with
+//!    MSAA (Lauritzen 2010, [`crate::msaa`]) an edge pixel sums them for each of its samples at
+//!    the sample's location and takes the mean colour, in the same rounds (the bounds of steps 1–3
+//!    span every sample).
 //!
 //! **No capacity can be exceeded.** The list holds [`LIST_CAPACITY`] lights. A batch is started
 //! only while it fits (`count + CULL_BATCH ≤ LIST_CAPACITY`); a full list is shaded (step 5
@@ -31,6 +34,7 @@ use crate::coop::gpu::GpuCoop;
 use crate::coop::{Coop, SharedU32};
 use crate::layout::*;
 use crate::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
+use crate::msaa::{self, MAX_SAMPLES};
 use crate::shading::{self, specular_entries, BACKGROUND_RGBA8};
 use crate::tile_cull::*;
 use glam::Vec3;
@@ -85,8 +89,19 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     // 1–3.
     let (px, cull) = tile_bounds(c, s, &fp.grid, tx, ty, p.mode, depth, NO_WIDENING);
     let mut out = TileOutput { pixels: px.pixels, colours: [BACKGROUND_RGBA8; 4], tile_lights: 0, rounds: 0 };
-    // 4–5 in rounds; each pixel's sum carries over from round to round (lights in index order).
-    let mut sums = [Vec3::ZERO; MAX_PIXELS_PER_INVOCATION as usize];
+    // MSAA (`crate::msaa`): an edge pixel's every sample is shaded, at its own location, with the
+    // tile's list (its bounds span every sample); its sums take `MAX_SAMPLES` slots.
+    let samples = fp.grid.samples;
+    // 1 for an edge pixel (a `u32`: rust-gpu cannot fill a bool array).
+    let mut edge = [0u32; MAX_PIXELS_PER_INVOCATION as usize];
+    let mut slot = 0;
+    while slot < MAX_PIXELS_PER_INVOCATION {
+        let i = px.pixels[slot as usize];
+        edge[slot as usize] = (samples > 1 && i != NO_PIXEL && msaa::pixel_is_edge(fp, i, depth, normals, albedo)) as u32;
+        slot += 1;
+    }
+    // 4–5 in rounds; each sum carries over from round to round (lights in index order).
+    let mut sums = [Vec3::ZERO; (MAX_PIXELS_PER_INVOCATION * MAX_SAMPLES) as usize];
     let n = fp.num_lights;
     let mut next = if cull.empty { n } else { 0 };
     while next < n {
@@ -103,11 +118,21 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
         let mut slot = 0;
         while slot < MAX_PIXELS_PER_INVOCATION {
             let i = px.pixels[slot as usize];
-            if px.geo[slot as usize] != 0 {
+            let list = &*s;
+            let tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
+            let first = slot * MAX_SAMPLES;
+            if edge[slot as usize] != 0 {
+                let mut sample = 0;
+                while sample < samples {
+                    if !msaa::is_sky(fp, i, sample, depth) {
+                        let surface = msaa::sample_surface(fp, samples, i, sample, depth, normals, albedo, materials);
+                        shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[(first + sample) as usize]);
+                    }
+                    sample += 1;
+                }
+            } else if px.geo[slot as usize] != 0 {
                 let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
-                let list = &*s;
-                let tile_list = shading::index_range(0, count, |t| list.load(SHARED_LIST + t));
-                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[slot as usize]);
+                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[first as usize]);
             }
             slot += 1;
         }
@@ -116,9 +141,25 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     let mut slot = 0;
     while slot < MAX_PIXELS_PER_INVOCATION {
         let i = px.pixels[slot as usize];
-        if px.geo[slot as usize] != 0 {
+        let first = slot * MAX_SAMPLES;
+        if edge[slot as usize] != 0 {
+            let mut mean = Vec3::ZERO;
+            let mut sample = 0;
+            while sample < samples {
+                mean += if msaa::is_sky(fp, i, sample, depth) {
+                    msaa::background()
+                } else {
+                    let surface = msaa::sample_surface(fp, samples, i, sample, depth, normals, albedo, materials);
+                    let mut sum = sums[(first + sample) as usize];
+                    shading::shade_directional_lights::<SPECULAR>(&surface, fp.effects, fp.num_lights, lights, &mut sum);
+                    msaa::sample_colour(fp, bounds, i, &surface, sum, out.tile_lights)
+                };
+                sample += 1;
+            }
+            out.colours[slot as usize] = msaa::resolve(mean, samples);
+        } else if px.geo[slot as usize] != 0 {
             let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
-            let mut sum = sums[slot as usize];
+            let mut sum = sums[first as usize];
             shading::shade_directional_lights::<SPECULAR>(&surface, fp.effects, fp.num_lights, lights, &mut sum);
             out.colours[slot as usize] = shading::output_colour(fp, bounds, i, &surface, sum, out.tile_lights);
         }

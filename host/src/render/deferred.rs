@@ -8,7 +8,7 @@ use super::msaa::Multisampling;
 use crate::gpu::{Gpu, LightCompute};
 use crate::vk::{ImageUse, LightTyped, Recorder, VkResult};
 use shaders::kernels;
-use shaders::layout::MsaaParams;
+use shaders::layout::FrameParams;
 use anyhow::{Context as _, Result};
 
 pub const DEFERRED: Description = Description {
@@ -31,7 +31,7 @@ pub struct Deferred {
     transparency: Option<Transparency>,
     /// The MSAA edge pass's pipelines (`--msaa` above 1): every sample of an edge pixel with
     /// every light.
-    edges: Option<[LightCompute<MsaaParams>; 2]>,
+    edges: Option<[LightCompute<FrameParams>; 2]>,
 }
 
 impl Deferred {
@@ -59,7 +59,7 @@ impl LightingTechnique for Deferred {
                 rec.dispatch_indirect(
                     super::shading_pipeline(edges, p)?,
                     &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &m.edges],
-                    &m.params(p),
+                    p,
                     &m.edges,
                     Multisampling::ARGS_WORD,
                 )

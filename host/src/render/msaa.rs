@@ -15,7 +15,7 @@
 use crate::gpu::{Gpu, ALBEDO_FORMAT};
 use crate::vk::{Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, Recorder, TargetFormat, VkResult};
 use shaders::kernels;
-use shaders::layout::{DrawParams, FrameParams, MsaaParams};
+use shaders::layout::{DrawParams, FrameParams};
 use shaders::msaa::{EDGE_ARGS_WORD, EDGE_HEADER_WORDS};
 use shaders::octahedral::Precision;
 
@@ -34,7 +34,7 @@ pub struct Multisampling {
     pub samples: u32,
     /// The G-buffer pipelines at `samples` samples, by draw variant (`gbuffer::Draw::variant`).
     pub gbuffer: [GraphicsPipeline<DrawParams>; 3],
-    gather: ComputePipeline<MsaaParams>,
+    gather: ComputePipeline<FrameParams>,
     edge_args: ComputePipeline<()>,
     /// The edge list: `EDGE_HEADER_WORDS` words (count, the edge pass's indirect workgroup
     /// counts), then up to one pixel index per pixel.
@@ -63,11 +63,6 @@ impl Multisampling {
         }))
     }
 
-    /// The push constants of the MSAA kernels for a frame.
-    pub fn params(&self, p: &FrameParams) -> MsaaParams {
-        MsaaParams { frame: *p, samples: self.samples, _pad: [0; 3] }
-    }
-
     /// After the multisampled G-buffer pass (`targets` in their target uses): every sample into
     /// the buffers' planes, the edge list and its indirect arguments (`shaders::msaa` steps 2–3).
     pub fn record_gather(&self, rec: &mut Recorder<'_>, targets: [(&Image, ImageUse); 3], buffers: [&Buffer; 3], p: &FrameParams) -> VkResult<()> {
@@ -77,7 +72,7 @@ impl Multisampling {
         rec.fill(&self.edges, 0);
         let [depth, normals, albedo] = buffers;
         let images = targets.map(|(i, _)| i);
-        rec.dispatch_linear_reading(&self.gather, &[depth, normals, albedo, &self.edges], &images, &self.params(p), p.count)?;
+        rec.dispatch_linear_reading(&self.gather, &[depth, normals, albedo, &self.edges], &images, p, p.count)?;
         rec.dispatch(&self.edge_args, &[&self.edges], &(), [1, 1, 1])
     }
 

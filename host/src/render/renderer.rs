@@ -147,6 +147,7 @@ impl Renderer {
     /// Checks the scene and settings, uploads the scene and creates the technique.
     pub fn new(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Self> {
         let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
+        let grid = ClusterGrid { samples: s.msaa.max(1), ..grid };
         if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
             bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
         }
@@ -161,6 +162,10 @@ impl Renderer {
         let ctx = &gpu.ctx;
         check_light_count(gpu, scene.lights.len())?;
         crate::preflight::check_msaa(&ctx.info, s.technique, s.msaa, s.width, s.height, s.normal_precision)?;
+        let per_sample = (s.technique.description().llvmpipe_lights)(s.tile_size.max(1)) / s.msaa.max(1);
+        if ctx.info.is_llvmpipe() && s.msaa > 1 && scene.lights.len() > per_sample as usize {
+            bail!("{} lights at --msaa {}: an edge pixel's invocation visits its lights once per sample, and lavapipe's loop limiter allows {per_sample} lights per sample here", scene.lights.len(), s.msaa);
+        }
         if s.msaa > 1 && scene.draws.iter().any(|d| gbuffer::is_transparent(d, &scene.materials)) {
             bail!("--msaa {}: transparent materials are drawn once per pixel over the opaque frame, not per sample: render scenes with transparency at --msaa 1", s.msaa);
         }

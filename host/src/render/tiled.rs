@@ -26,7 +26,7 @@ pub const TILED: Description = Description {
     knobs: &[],
     own_kernels: &[],
     own_raster: &[],
-    msaa: false,
+    msaa: true,
 };
 
 pub const TILED_25D: Description = Description {
