@@ -4,9 +4,8 @@
 //! and the `--oit` resolve), for scenes with transparent draws.
 use super::technique::{boxed, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, TransparentDraws};
 use super::transparent::{OpaqueDepth, Transparency, TransparencyStats};
-use super::msaa::Multisampling;
 use crate::gpu::{Gpu, LightCompute};
-use crate::vk::{ImageUse, LightTyped, Recorder, VkResult};
+use crate::vk::{ImageUse, Recorder, VkResult};
 use shaders::kernels;
 use shaders::layout::FrameParams;
 use anyhow::{Context as _, Result};
@@ -38,7 +37,7 @@ impl Deferred {
     pub fn new(gpu: &Gpu, f: &FrameInputs<'_>) -> Result<Self> {
         Ok(Self {
             transparency: Transparency::new(f, gpu, None).context("creating the transparent pass")?,
-            edges: f.msaa.map(|_| kernels::SHADE_EDGES_DEFERRED.map(|k| LightTyped::compute(&gpu.light_compute, k))),
+            edges: super::msaa::edge_pipelines(gpu, f.msaa, kernels::SHADE_EDGES_DEFERRED),
         })
     }
 }
@@ -55,15 +54,7 @@ impl LightingTechnique for Deferred {
             )
         })?;
         if let (Some(m), Some(edges)) = (f.msaa, &self.edges) {
-            rec.pass("edge shading", |rec| {
-                rec.dispatch_indirect(
-                    super::shading_pipeline(edges, p)?,
-                    &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &m.edges],
-                    p,
-                    &m.edges,
-                    Multisampling::ARGS_WORD,
-                )
-            })?;
+            m.record_edges(rec, edges, p, &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds])?;
         }
         match &self.transparency {
             Some(tr) => tr.record_shade(rec, f, p, OpaqueDepth { image: &t.depth, from: ImageUse::CopySource }, None),

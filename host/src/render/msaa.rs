@@ -12,8 +12,9 @@
 //! Memory per sample ([`bytes_per_sample`]): the targets' 24 B (the normal target is
 //! `RGBA32_SFLOAT` at every precision) and the buffers' 12 B (24 with float32 normals), plus the
 //! edge list of one word per pixel: 36 B per sample and 4 B per pixel at 2×16-bit normals.
-use crate::gpu::{Gpu, ALBEDO_FORMAT};
-use crate::vk::{Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, Recorder, TargetFormat, VkResult};
+use crate::gpu::{Gpu, LightCompute, ALBEDO_FORMAT};
+use crate::vk::{Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, LightTyped, Recorder, TargetFormat, VkResult};
+use shaders::kernels::Kernel;
 use shaders::kernels;
 use shaders::layout::{DrawParams, FrameParams};
 use shaders::msaa::{EDGE_ARGS_WORD, EDGE_HEADER_WORDS};
@@ -76,8 +77,12 @@ impl Multisampling {
         rec.dispatch(&self.edge_args, &[&self.edges], &(), [1, 1, 1])
     }
 
-    /// Word of the edge list's indirect workgroup counts (for `Recorder::dispatch_indirect`).
-    pub const ARGS_WORD: u32 = EDGE_ARGS_WORD;
+    /// A technique's edge pass (`shaders::msaa` step 5): `pipes` (its `_diffuse` / `_specular`
+    /// edge kernels) over the listed edge pixels, with `buffers` and then the edge list bound.
+    pub fn record_edges(&self, rec: &mut Recorder<'_>, pipes: &[LightCompute<FrameParams>; 2], p: &FrameParams, buffers: &[&Buffer]) -> VkResult<()> {
+        let bound: Vec<&Buffer> = buffers.iter().copied().chain([&self.edges]).collect();
+        rec.pass("edge shading", |rec| rec.dispatch_indirect(super::shading_pipeline(pipes, p)?, &bound, p, &self.edges, EDGE_ARGS_WORD))
+    }
 
     /// Edge pixels of the last frame.
     pub fn edge_pixels(&mut self) -> VkResult<u32> {
@@ -87,4 +92,10 @@ impl Multisampling {
     pub fn buffers(&self) -> Vec<(String, u64)> {
         vec![(self.edges.name.clone(), self.edges.size)]
     }
+}
+
+/// A technique's edge-pass pipelines for `handles` (its `_diffuse` / `_specular` edge kernels)
+/// when the frame is multisampled (`msaa`), else none: nothing is created for one sample.
+pub fn edge_pipelines(gpu: &Gpu, msaa: Option<&Multisampling>, handles: [Kernel<FrameParams>; 2]) -> Option<[LightCompute<FrameParams>; 2]> {
+    msaa.map(|_| handles.map(|k| LightTyped::compute(&gpu.light_compute, k)))
 }

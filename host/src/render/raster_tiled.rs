@@ -34,7 +34,7 @@ pub const RASTER_TILED: Description = Description {
     knobs: &[],
     own_kernels: handles::COMPUTE,
     own_raster: handles::RASTER,
-    msaa: false,
+    msaa: true,
 };
 
 /// Entries of each tile's first list.
@@ -45,6 +45,8 @@ pub struct RasterTiled {
     rects_pipe: ComputePipeline<FrameParams>,
     append_pipe: LightRaster<FrameParams>,
     shade_pipes: [LightCompute<FrameParams>; 2],
+    /// The MSAA edge pass (`--msaa` above 1).
+    edge_pipes: Option<[LightCompute<FrameParams>; 2]>,
     tiles: u32,
     /// List entries per tile.
     capacity: u32,
@@ -77,6 +79,7 @@ impl RasterTiled {
             rects_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::LIGHT_RECTS)?,
             append_pipe: LightTyped::raster(raster, handles::APPEND, &[] as &[(TargetFormat, Blend)], DepthTest::Off),
             shade_pipes: handles::SHADE.map(|k| LightTyped::compute(&gpu.light_compute, k)),
+            edge_pipes: super::msaa::edge_pipelines(gpu, f.msaa, handles::SHADE_EDGES),
             tiles,
             capacity,
             tile_depths: words("raster-tiled tile depth bounds", (DEPTH_BOUND_WORDS * tiles) as u64)?,
@@ -118,7 +121,11 @@ impl LightingTechnique for RasterTiled {
                 &p,
                 p.count,
             )
-        })
+        })?;
+        match (f.msaa, &self.edge_pipes) {
+            (Some(m), Some(pipes)) => m.record_edges(rec, pipes, &p, &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.counts, &self.lists]),
+            _ => Ok(()),
+        }
     }
 
     /// Reads the tiles' counts; grows the lists past the longest when it passed the capacity.

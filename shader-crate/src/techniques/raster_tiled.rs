@@ -26,6 +26,8 @@
 //!    ([`append`]: entries past `FrameParams::light_capacity` are counted, not stored).
 //! 4. **Shading** (`shade_raster_tiled_diffuse` / `_specular`, one invocation per pixel): the
 //!    pixel's tile's list through `shading::shade_gbuffer_pixel`.
+//! 5. **Edge shading** (MSAA only, `crate::msaa`; `shade_edges_raster_tiled_*`): each edge
+//!    pixel's samples with its tile's list; step 1's bounds span every sample.
 //!
 //! **No light is dropped.** A tile whose count passed the capacity makes the host grow the lists
 //! to the longest count + 25 % and render the frame again.
@@ -274,6 +276,48 @@ specular_entries! {
     }
 }
 
+#[cfg(feature = "compute")]
+specular_entries! {
+    shade_edges_raster_tiled_diffuse, shade_edges_raster_tiled_specular;
+    /// Step 5 with MSAA (`crate::msaa`): edge `slot` of the edge list, every sample with its
+    /// tile's list (whose depth bounds spanned every sample).
+    fn shade_edges_raster_tiled_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lists: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] edges: &[u32],
+    ) {
+        let p = &crate::light_types::specialise(p, light_types);
+        let slot = linear_index(wg, nwg, local);
+        if slot >= edges[0] {
+            return;
+        }
+        let i = edges[(crate::msaa::EDGE_HEADER_WORDS + slot) as usize];
+        let t = tile_of_pixel(&p.grid, i);
+        let n = counts[t as usize];
+        // `move` over values: no pointer to this function's locals in the closure.
+        let (first, len, effects, num_lights) = (t * p.light_capacity, if n < p.light_capacity { n } else { p.light_capacity }, p.effects, p.num_lights);
+        let shade = move |surface: &shading::Surface| {
+            let mut sum = Vec3::ZERO;
+            let count = shading::shade_lights::<SPECULAR, true, _>(surface, effects, num_lights, lights, &shading::list_range(lists, first, len), &mut sum);
+            shading::shade_directional_lights::<SPECULAR>(surface, effects, num_lights, lights, &mut sum);
+            (sum, count)
+        };
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+    }
+}
+
 /// Step 3, vertex stage: vertex `v` is corner `v % 6` of light `v / 6`'s quad.
 #[cfg(feature = "graphics")]
 #[spirv(vertex)]
@@ -325,11 +369,16 @@ pub mod handles {
         Kernel::new("raster_tiled::shade_raster_tiled_diffuse", 9, [256, 1, 1], false),
         Kernel::new("raster_tiled::shade_raster_tiled_specular", 9, [256, 1, 1], false),
     ];
+    /// Step 5 (MSAA) `[diffuse only, with specular]`: as [`SHADE`], and the edge list.
+    pub const SHADE_EDGES: [Kernel<FrameParams>; 2] = [
+        Kernel::new("raster_tiled::shade_edges_raster_tiled_diffuse", 10, [256, 1, 1], false),
+        Kernel::new("raster_tiled::shade_edges_raster_tiled_specular", 10, [256, 1, 1], false),
+    ];
     /// Step 3: quads (vertex stage); tile depths, lights, counts, lists (fragment stage).
     pub const APPEND: RasterKernel<FrameParams> = RasterKernel::with_vertex_buffers("raster_tiled::light_rect_vs", "raster_tiled::append_light_fs", 1, 4, 0);
 
     /// Every compute handle, erased.
-    pub const COMPUTE: &[Kernel<()>] = &[TILE_DEPTHS.erased(), LIGHT_RECTS.erased(), SHADE[0].erased(), SHADE[1].erased()];
+    pub const COMPUTE: &[Kernel<()>] = &[TILE_DEPTHS.erased(), LIGHT_RECTS.erased(), SHADE[0].erased(), SHADE[1].erased(), SHADE_EDGES[0].erased(), SHADE_EDGES[1].erased()];
     /// Every raster handle, erased.
     pub const RASTER: &[RasterKernel<()>] = &[APPEND.erased()];
 }
