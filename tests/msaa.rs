@@ -12,7 +12,8 @@ mod common;
 use common::pixels::{channel_diff, lit};
 use common::render::{city, frame, render_error, settings};
 use host::gpu::Gpu;
-use host::render::{Frame, Settings, Technique};
+use host::render::clustered::UniqueClusters;
+use host::render::{Frame, Knob, Settings, Technique};
 use host::scene::lights;
 use shaders::layout::PointLight;
 use shaders::lighting::{decode_srgb8, encode_srgb8};
@@ -133,10 +134,14 @@ fn every_msaa_technique_equals_deferred_at_the_same_samples() {
             let reference = frame(&gpu, &scene, lights, &with_msaa(Technique::Deferred, samples));
             assert!(reference.edge_pixels > 0);
             for &t in Technique::ALL.iter().filter(|&&t| t != Technique::Deferred && t.description().msaa) {
-                let f = frame(&gpu, &scene, lights, &Settings { tile_size: 16, ..with_msaa(t, samples) });
-                let worst = common::pixels::worst_channel(&reference.pixels, &f.pixels);
-                assert!(worst <= 1, "{} at {samples} samples, {} lights: differs from deferred by {worst}/255", t.name(), lights.len());
-                assert_eq!(f.edge_pixels, reference.edge_pixels, "{}: the same edges", t.name());
+                // Both ways of finding the unique clusters where the technique has them.
+                let paths: &[UniqueClusters] = if t.reads(Knob::UniqueClusters) { &[UniqueClusters::Tiles, UniqueClusters::PageTable] } else { &[UniqueClusters::Tiles] };
+                for &unique_clusters in paths {
+                    let f = frame(&gpu, &scene, lights, &Settings { tile_size: 16, unique_clusters, ..with_msaa(t, samples) });
+                    let worst = common::pixels::worst_channel(&reference.pixels, &f.pixels);
+                    assert!(worst <= 1, "{} ({}) at {samples} samples, {} lights: differs from deferred by {worst}/255", t.name(), unique_clusters.name(), lights.len());
+                    assert_eq!(f.edge_pixels, reference.edge_pixels, "{}: the same edges", t.name());
+                }
             }
         }
     }

@@ -16,6 +16,9 @@
 //!    [`crate::cluster_bounds`]); `clustered-bvh` replaces these two with [`crate::clustered_bvh`].
 //! 8. **Shading** — [`shade_clustered_diffuse`] / [`shade_clustered_specular`]: per pixel, key →
 //!    page → slot → cluster → its list, through [`shading::shade_lights`].
+//! 9. **Edge shading** (MSAA only, [`crate::msaa`]) — [`shade_edges_clustered_diffuse`] / `_specular`
+//!    (and the tile path's `shade_edges_clustered_tiles_*`): each edge pixel's samples with their
+//!    own clusters' lists; steps 1–5 found every sample's cluster.
 //!
 //! **Memory**: the page table's (see [`crate::page_table`]), counts and offsets 4 B per unique
 //! cluster, 4 B per light reference; the page-table kernels use the scan's workgroup memory
@@ -34,7 +37,9 @@ use crate::{cluster_bounds, cluster_test, lighting};
 use spirv_std::glam::UVec3;
 use spirv_std::spirv;
 
-/// 1–2. Cluster key per pixel from the depth buffer, and the mark of its page.
+/// 1–2. Cluster key per pixel from the depth buffer, and the mark of its page. With MSAA
+/// (`crate::msaa`) per sample: entry `e = s·n + i` of every plane (`p.count` = samples × pixels),
+/// so the edge pixels' samples have their clusters too.
 #[spirv(compute(threads(256)))]
 pub fn pixel_keys(
     #[spirv(workgroup_id)] wg: UVec3,
@@ -51,8 +56,9 @@ pub fn pixel_keys(
         return;
     }
     let g = &p.grid;
-    let key = page_table::pixel_key(g, bounds, i % g.width, i / g.width, depth[i as usize]);
-    keys[i as usize] = key;
+    let (e, i) = (i, i % (g.width * g.height));
+    let key = page_table::pixel_key(g, bounds, i % g.width, i / g.width, depth[e as usize]);
+    keys[e as usize] = key;
     // Most pixels find their page marked already: a load instead of a store to a word that
     // thousands of pixels share.
     if key != INVALID_KEY {
@@ -95,10 +101,12 @@ pub fn tile_clusters(
     let words = tile_clusters::mask_words(g);
     // Captured by value (`move`): a closure holding a reference to a local is a pointer that
     // `spirv-val` may reject.
+    // With MSAA (`crate::msaa`) every sample's key, plane by plane (`s·n + i`).
     let to_keys = &mut *keys;
+    let (tile_pixels, plane) = (rect.2 * rect.3, g.width * g.height);
     let slice_of = move |q: u32| {
-        let (px, py) = tile_clusters::tile_pixel(rect, q);
-        let at = py * g.width + px;
+        let (px, py) = tile_clusters::tile_pixel(rect, q % tile_pixels);
+        let at = (q / tile_pixels) * plane + py * g.width + px;
         let key = page_table::pixel_key(g, bounds, px, py, depth[at as usize]);
         to_keys[at as usize] = key;
         if key == INVALID_KEY {
@@ -118,7 +126,7 @@ pub fn tile_clusters(
         }
         first
     };
-    let (mask, first) = tile_clusters::tile_clusters(&c, shared, words, rect.2 * rect.3, slice_of, reserve);
+    let (mask, first) = tile_clusters::tile_clusters(&c, shared, words, tile_pixels * g.samples, slice_of, reserve);
     if local_index < words {
         let at = tile_clusters::record_at(g, i, j, local_index) as usize;
         records[at] = mask;
@@ -433,6 +441,97 @@ specular_entries! {
         let cluster_list = shading::list_range(list, offsets[cluster], counts[cluster]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
     }
+}
+
+specular_entries! {
+    shade_edges_clustered_diffuse, shade_edges_clustered_specular;
+    /// 9. With MSAA (`crate::msaa`): edge `slot` of the edge list, each sample with the list of
+    /// its own cluster (its key from step 1, found through the page table as in step 8).
+    fn shade_edges_clustered_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] page_base: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slot_rank: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] edges: &[u32],
+    ) {
+        let p = &crate::light_types::specialise(p, light_types);
+        let Some(i) = edge_pixel(wg, nwg, local, edges) else { return };
+        let (n, effects, num_lights) = (p.count, p.effects, p.num_lights);
+        let shade = move |s: u32, surface: &shading::Surface| {
+            let key = keys[(s * n + i) as usize];
+            let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
+            shade_cluster::<SPECULAR>(surface, effects, num_lights, lights, &shading::list_range(list, offsets[cluster], counts[cluster]))
+        };
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+    }
+}
+
+specular_entries! {
+    shade_edges_clustered_tiles_diffuse, shade_edges_clustered_tiles_specular;
+    /// 9 on the tile path: each sample's cluster through its tile's record
+    /// ([`tile_clusters::cluster_of_key`]).
+    fn shade_edges_clustered_tiles_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] keys: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] records: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] edges: &[u32],
+    ) {
+        let p = &crate::light_types::specialise(p, light_types);
+        let Some(i) = edge_pixel(wg, nwg, local, edges) else { return };
+        let (n, effects, num_lights, grid) = (p.count, p.effects, p.num_lights, p.grid);
+        let shade = move |s: u32, surface: &shading::Surface| {
+            let cluster = tile_clusters::cluster_of_key(&grid, records, keys[(s * n + i) as usize]) as usize;
+            shade_cluster::<SPECULAR>(surface, effects, num_lights, lights, &shading::list_range(list, offsets[cluster], counts[cluster]))
+        };
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+    }
+}
+
+/// The pixel of an edge-pass invocation: entry `slot` of the edge list, or `None` past its end.
+#[inline]
+fn edge_pixel(wg: UVec3, nwg: UVec3, local: u32, edges: &[u32]) -> Option<u32> {
+    let slot = linear_index(wg, nwg, local);
+    if slot >= edges[0] {
+        return None;
+    }
+    Some(edges[(crate::msaa::EDGE_HEADER_WORDS + slot) as usize])
+}
+
+/// A sample's radiance over its cluster's list and the directional lights, and the list's length.
+#[inline]
+fn shade_cluster<const SPECULAR: bool>(surface: &shading::Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &impl shading::LightList) -> (spirv_std::glam::Vec3, u32) {
+    let mut sum = spirv_std::glam::Vec3::ZERO;
+    let count = shading::shade_lights::<SPECULAR, true, _>(surface, effects, num_lights, lights, list, &mut sum);
+    shading::shade_directional_lights::<SPECULAR>(surface, effects, num_lights, lights, &mut sum);
+    (sum, count)
 }
 
 /// The pixel (and its key) a cluster-list shading invocation shades, or `None` past the frame

@@ -85,7 +85,7 @@ specular_entries! {
         let i = edges[(msaa::EDGE_HEADER_WORDS + slot) as usize];
         // `move` over values: no pointer to this function's locals in the closure.
         let (effects, n, view) = (p.effects, p.num_lights, p.view);
-        let shade = move |surface: &shading::Surface| {
+        let shade = move |_: u32, surface: &shading::Surface| {
             let mut sum = Vec3::ZERO;
             shading::shade_lights::<SPECULAR, true, _>(surface, effects, n, lights, &shading::light_range(0, n), &mut sum);
             shading::shade_directional_lights::<SPECULAR>(surface, effects, n, lights, &mut sum);

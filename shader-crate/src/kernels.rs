@@ -84,6 +84,12 @@ pub const TILE_CLUSTERS: Kernel<TileClusterParams> =
     Kernel::new("clustered::tile_clusters", 7, [crate::tile_clusters::TILE_WORKGROUP, 1, 1], true);
 pub const SHADE_CLUSTERED_TILES_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_diffuse", 14);
 pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_specular", 14);
+/// The MSAA edge passes (`msaa.rs` step 5) of the page-table and tile paths: the shading's
+/// buffers (without the tile path's counters and dispatch) and the edge list.
+pub const SHADE_EDGES_CLUSTERED: [Kernel<FrameParams>; 2] =
+    [linear("clustered::shade_edges_clustered_diffuse", 14), linear("clustered::shade_edges_clustered_specular", 14)];
+pub const SHADE_EDGES_CLUSTERED_TILES: [Kernel<FrameParams>; 2] =
+    [linear("clustered::shade_edges_clustered_tiles_diffuse", 13), linear("clustered::shade_edges_clustered_tiles_specular", 13)];
 
 // Brute-force deferred reference (`deferred.rs`).
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
@@ -190,6 +196,10 @@ pub const ALL: &[Kernel<()>] = &[
     TILE_CLUSTERS.erased(),
     SHADE_CLUSTERED_TILES_DIFFUSE.erased(),
     SHADE_CLUSTERED_TILES_SPECULAR.erased(),
+    SHADE_EDGES_CLUSTERED[0].erased(),
+    SHADE_EDGES_CLUSTERED[1].erased(),
+    SHADE_EDGES_CLUSTERED_TILES[0].erased(),
+    SHADE_EDGES_CLUSTERED_TILES[1].erased(),
     SHADE_DEFERRED_DIFFUSE.erased(),
     SHADE_DEFERRED_SPECULAR.erased(),
     SHADE_EDGES_DEFERRED[0].erased(),

@@ -156,8 +156,8 @@ pub fn sample_surface(p: &FrameParams, samples: u32, i: u32, s: u32, depth: &[f3
 }
 
 /// Step 5 for edge pixel `i`: the mean display colour of its samples, packed as sRGB8.
-/// `shade(surface)` is the technique's radiance at a sample's surface (its light list's sum and
-/// the directional lights) and the list's length for the heatmap.
+/// `shade(s, surface)` is the technique's radiance at sample `s`'s surface (its light list's sum
+/// and the directional lights) and the list's length for the heatmap.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn shade_edge_pixel(
@@ -169,7 +169,7 @@ pub fn shade_edge_pixel(
     normals: &[u32],
     albedo: &[u32],
     materials: &[MaterialGpu],
-    shade: impl Fn(&Surface) -> (Vec3, u32),
+    shade: impl Fn(u32, &Surface) -> (Vec3, u32),
 ) -> u32 {
     let mut sum = Vec3::ZERO;
     let mut s = 0;
@@ -178,7 +178,7 @@ pub fn shade_edge_pixel(
             background()
         } else {
             let surface = sample_surface(p, samples, i, s, depth, normals, albedo, materials);
-            let (radiance, lights) = shade(&surface);
+            let (radiance, lights) = shade(s, &surface);
             sample_colour(p, bounds, i, &surface, radiance, lights)
         };
         s += 1;

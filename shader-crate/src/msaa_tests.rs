@@ -159,16 +159,16 @@ fn an_edge_pixel_is_the_mean_of_its_samples_colours() {
         albedo[e] = 0x01_ff_ff_ff;
     }
     let radiance = Vec3::new(0.25, 0.5, 1.0);
-    let colour = shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |_| (radiance, 0));
+    let colour = shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
     let lit = lighting::decode_srgb8(lighting::encode_srgb8(lighting::tonemap(radiance, p.exposure)));
     let sky = lighting::decode_srgb8(shading::BACKGROUND_RGBA8);
     assert_eq!(colour, lighting::encode_srgb8((lit + sky) * 0.5));
     // Every sample on the surface: the single colour.
-    let colour = shade_edge_pixel(&p, 1, i, &[], &depth, &normals, &albedo, &materials, |_| (radiance, 0));
+    let colour = shade_edge_pixel(&p, 1, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
     assert_eq!(colour, lighting::encode_srgb8(lit));
     // The shading function sees each sample's own position.
     let seen = core::cell::RefCell::new(Vec::new());
-    shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |s| {
+    shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |_, s| {
         seen.borrow_mut().push(s.pos);
         (radiance, 0)
     });

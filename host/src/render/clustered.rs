@@ -56,7 +56,7 @@
 use super::bvh::LightBvh;
 use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, llvmpipe_chunked_lights, ClusterLists, Description, FrameInputs, Knob, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, LightCompute};
 use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{bail, Context as _, Result};
 use shaders::clustered_bvh::{STAGED_CLUSTERS, STAGED_LIGHTS};
@@ -77,7 +77,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     knobs: &[Knob::UniqueClusters],
     own_kernels: &[],
     own_raster: &[],
-    msaa: false,
+    msaa: true,
 };
 
 pub const CLUSTERED_BVH: Description = Description {
@@ -100,6 +100,8 @@ pub struct Clustered {
     transparency: Option<Transparency>,
     /// `(unique clusters, light references, pages)` of the last frame.
     last: (u32, u32, u32),
+    /// The MSAA edge pass of the frame's path (`--msaa` above 1).
+    edges: Option<[LightCompute<FrameParams>; 2]>,
 }
 
 impl Clustered {
@@ -126,7 +128,12 @@ impl Clustered {
         let transparency = Transparency::new(f, gpu, Some(TRANSPARENT_MARK_PAGES)).context("creating the transparent pass")?;
         let unique = f.settings.unique_clusters;
         let buffers = ClusterBuffers::new(gpu, &grid, caps, unique, transparency.is_some(), bvh.is_some()).context("allocating the cluster buffers")?;
-        Ok(Self { bvh, grid, unique, buffers, transparency, last: (0, 0, 0) })
+        let edge_kernels = match buffers.path {
+            UniqueBuffers::Tiles { .. } => shaders::kernels::SHADE_EDGES_CLUSTERED_TILES,
+            UniqueBuffers::PageTable(_) => shaders::kernels::SHADE_EDGES_CLUSTERED,
+        };
+        let edges = super::msaa::edge_pipelines(gpu, f.msaa, edge_kernels);
+        Ok(Self { bvh, grid, unique, buffers, transparency, last: (0, 0, 0), edges })
     }
 }
 
@@ -149,7 +156,11 @@ impl LightingTechnique for Clustered {
 
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let p = FrameParams { light_capacity: self.buffers.caps.light_refs, ..f.params };
-        self.buffers.record(gpu, rec, &p, f, self.bvh.as_ref(), self.transparency.as_ref())
+        self.buffers.record(gpu, rec, &p, f, self.bvh.as_ref(), self.transparency.as_ref())?;
+        match (f.msaa, &self.edges) {
+            (Some(m), Some(pipes)) => m.record_edges(rec, pipes, &p, &self.buffers.edge_bindings(f)),
+            _ => Ok(()),
+        }
     }
 
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
@@ -303,7 +314,9 @@ impl ClusterBuffers {
     /// `staged`: with the stage of the BVH walks.
     pub fn new(gpu: &Gpu, grid: &ClusterGrid, caps: Capacities, unique: UniqueClusters, transparent: bool, staged: bool) -> VkResult<Self> {
         let ctx = &gpu.ctx;
-        let pixels = grid.width * grid.height;
+        // Every sample has a key with MSAA (`shaders::msaa`): the keys and the bound on the
+        // clusters count samples.
+        let pixels = grid.width * grid.height * grid.samples;
         let words = |name: &str, n: u32| {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
             Buffer::storage(ctx, name, 4 * n as u64)
@@ -349,6 +362,20 @@ impl ClusterBuffers {
             counters: zeroed("counters", COUNTERS)?,
             dispatch_args: zeroed("indirect dispatches", ARGS_WORDS)?,
         })
+    }
+
+    /// The edge pass's buffers before the edge list (`shaders::kernels::SHADE_EDGES_CLUSTERED*`).
+    fn edge_bindings<'a>(&'a self, f: &'a FrameInputs<'_>) -> Vec<&'a Buffer> {
+        let g = f.targets;
+        let path: Vec<&Buffer> = match &self.path {
+            UniqueBuffers::Tiles { records } => vec![records],
+            UniqueBuffers::PageTable(t) => vec![&t.page_base, &t.slot_rank],
+        };
+        [&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.keys]
+            .into_iter()
+            .chain(path)
+            .chain([&self.counts, &self.offsets, &self.list, f.lights, f.materials, f.frame, f.bounds])
+            .collect()
     }
 
     /// Bytes per buffer, for the stats file.
@@ -445,13 +472,15 @@ impl ClusterBuffers {
     fn record_page_table(&self, gpu: &Gpu, rec: &mut Recorder<'_>, p: &FrameParams, f: &FrameInputs<'_>, t: &PageTable, per_group: u32, transparency: Option<&Transparency>) -> VkResult<()> {
         let (g, bounds) = (f.targets, f.bounds);
         let k = &gpu.kernels;
-        let n = p.count;
+        // Every sample's key with MSAA (`shaders::clustered::pixel_keys`).
+        let n = p.count * p.grid.samples;
+        let all = FrameParams { count: n, ..*p };
         // Marks and slots are zero at allocation and cleared by their last readers
         // (`allocate_pages`, `compact_page_slots`): no fill at their capacity.
         // The counters are stored whole by the passes that count (the light references start
         // at 0 in `allocate_pages`): no fill.
         rec.pass("keys", |rec| {
-            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &t.marks], p, n)?;
+            rec.dispatch_linear(&k.pixel_keys, &[&g.depth_buf, bounds, &self.keys, &t.marks], &all, n)?;
             match transparency {
                 Some(tr) => {
                     let m = Marks { stage: TRANSPARENT_MARK_PAGES, marks: &t.marks, page_table: Some((&t.page_base, &t.slots)) };
@@ -464,7 +493,7 @@ impl ClusterBuffers {
             // One workgroup allocates the marked pages (and sizes the per-page dispatches).
             let a = PageTableParams { pages: t.page_count, capacity: self.caps.pages, per_group: 1, args_offset: ARGS_PAGES, _pad: [0; 4] };
             rec.dispatch(&k.allocate_pages, &[&t.marks, &t.page_base, &t.page_of_alloc, &self.counters, &self.dispatch_args], &a, [1, 1, 1])?;
-            rec.dispatch_linear(&k.store_slots, &[&self.keys, &t.page_base, &t.slots], p, n)?;
+            rec.dispatch_linear(&k.store_slots, &[&self.keys, &t.page_base, &t.slots], &all, n)?;
             if let Some(tr) = transparency {
                 let m = Marks { stage: TRANSPARENT_STORE_SLOTS, marks: &t.marks, page_table: Some((&t.page_base, &t.slots)) };
                 tr.record_clusters(rec, f, p, OpaqueDepth { image: &g.depth, from: ImageUse::DepthTarget }, &m)?;

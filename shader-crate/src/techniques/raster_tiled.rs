@@ -308,7 +308,7 @@ specular_entries! {
         let n = counts[t as usize];
         // `move` over values: no pointer to this function's locals in the closure.
         let (first, len, effects, num_lights) = (t * p.light_capacity, if n < p.light_capacity { n } else { p.light_capacity }, p.effects, p.num_lights);
-        let shade = move |surface: &shading::Surface| {
+        let shade = move |_: u32, surface: &shading::Surface| {
             let mut sum = Vec3::ZERO;
             let count = shading::shade_lights::<SPECULAR, true, _>(surface, effects, num_lights, lights, &shading::list_range(lists, first, len), &mut sum);
             shading::shade_directional_lights::<SPECULAR>(surface, effects, num_lights, lights, &mut sum);
