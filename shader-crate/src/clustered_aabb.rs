@@ -18,6 +18,8 @@
 //!    the cluster's list space with one atomic per subgroup, pass 2 writes the light indices (in
 //!    index order) — only if they fit the list buffer.
 //! 4. **Shading** — per pixel, the lights of its cluster's list ([`shading::shade_lights`]).
+//! 5. **Edge shading** (MSAA only, [`crate::msaa`]) — each edge pixel's samples with their own
+//!    clusters' lists ([`shade_edges_aabb_diffuse`] / `_specular`).
 //!
 //! **Capacity.** The list buffer has a capacity; the reservation counter ends at the number of
 //! references the frame needs, the host reads it back and, if it exceeds the capacity, grows the
@@ -181,7 +183,8 @@ pub fn aabb_bounds(
     }
 }
 
-/// 2a. Each pixel's cluster, flagged.
+/// 2a. Each pixel's cluster, flagged; with MSAA (`crate::msaa`) every sample's cluster is
+/// flagged too (the edge pass shades edge pixels' samples with them).
 #[spirv(compute(threads(256)))]
 #[allow(clippy::too_many_arguments)]
 pub fn aabb_mark(
@@ -203,6 +206,14 @@ pub fn aabb_mark(
     pixel_clusters[i as usize] = c;
     if c != NO_CLUSTER {
         flags[c as usize] = 1;
+    }
+    let mut s = 1;
+    while s < g.samples {
+        let c = pixel_cluster(g, bounds, i % g.width, i / g.width, depth[(s * p.count + i) as usize]);
+        if c != NO_CLUSTER && flags[c as usize] == 0 {
+            flags[c as usize] = 1;
+        }
+        s += 1;
     }
 }
 
@@ -307,6 +318,48 @@ specular_entries! {
         }
         let cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
         frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
+    }
+}
+
+specular_entries! {
+    shade_edges_aabb_diffuse, shade_edges_aabb_specular;
+    /// 5. With MSAA (`crate::msaa`): edge `slot` of the edge list, each sample with its own
+    /// cluster's list (step 2 flagged every sample's cluster).
+    fn shade_edges_aabb_impl<const SPECULAR: bool>(
+        #[spirv(workgroup_id)] wg: UVec3,
+        #[spirv(num_workgroups)] nwg: UVec3,
+        #[spirv(local_invocation_index)] local: u32,
+        #[spirv(push_constant)] p: &FrameParams,
+        #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] depth: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] normals: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] albedo: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] offsets: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] counts: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] list: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] counters: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] lights: &[PointLight],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] materials: &[MaterialGpu],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] frame: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] edges: &[u32],
+    ) {
+        let p = &crate::light_types::specialise(p, light_types);
+        let slot = linear_index(wg, nwg, local);
+        // An overflowed frame is re-run with a larger list (its pixels were drawn as background).
+        if slot >= edges[0] || counters[AABB_COUNTER_REFS as usize] > p.light_capacity {
+            return;
+        }
+        let i = edges[(crate::msaa::EDGE_HEADER_WORDS + slot) as usize];
+        let (n, effects, num_lights, g) = (p.count, p.effects, p.num_lights, p.grid);
+        let shade = move |s: u32, surface: &shading::Surface| {
+            let c = pixel_cluster(&g, bounds, i % g.width, i / g.width, depth[(s * n + i) as usize]) as usize;
+            let mut sum = Vec3::ZERO;
+            let count = shading::shade_lights::<SPECULAR, true, _>(surface, effects, num_lights, lights, &shading::list_range(list, offsets[c], counts[c]), &mut sum);
+            shading::shade_directional_lights::<SPECULAR>(surface, effects, num_lights, lights, &mut sum);
+            (sum, count)
+        };
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
     }
 }
 

@@ -91,6 +91,10 @@ pub const SHADE_EDGES_CLUSTERED: [Kernel<FrameParams>; 2] =
 pub const SHADE_EDGES_CLUSTERED_TILES: [Kernel<FrameParams>; 2] =
     [linear("clustered::shade_edges_clustered_tiles_diffuse", 13), linear("clustered::shade_edges_clustered_tiles_specular", 13)];
 
+/// The MSAA edge pass of `clustered-aabb` (`msaa.rs` step 5): the G-buffer, offsets, counts,
+/// list, counters, lights, materials, frame, bounds, edges.
+pub const SHADE_EDGES_AABB: [Kernel<FrameParams>; 2] = [linear("clustered_aabb::shade_edges_aabb_diffuse", 12), linear("clustered_aabb::shade_edges_aabb_specular", 12)];
+
 // Brute-force deferred reference (`deferred.rs`).
 pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
 pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
@@ -196,6 +200,8 @@ pub const ALL: &[Kernel<()>] = &[
     TILE_CLUSTERS.erased(),
     SHADE_CLUSTERED_TILES_DIFFUSE.erased(),
     SHADE_CLUSTERED_TILES_SPECULAR.erased(),
+    SHADE_EDGES_AABB[0].erased(),
+    SHADE_EDGES_AABB[1].erased(),
     SHADE_EDGES_CLUSTERED[0].erased(),
     SHADE_EDGES_CLUSTERED[1].erased(),
     SHADE_EDGES_CLUSTERED_TILES[0].erased(),

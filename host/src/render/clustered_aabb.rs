@@ -16,7 +16,7 @@
 //! per pixel; 4 B per light reference).
 use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, LightCompute};
 use crate::vk::{Buffer, ImageUse, Recorder, VkResult};
 use anyhow::{Context as _, Result};
 use shaders::clustered_aabb::{cluster_count, AABB_COUNTER_ACTIVE, AABB_COUNTER_REFS};
@@ -35,7 +35,7 @@ pub const CLUSTERED_AABB: Description = Description {
     knobs: &[],
     own_kernels: &[],
     own_raster: &[],
-    msaa: false,
+    msaa: true,
 };
 
 pub struct ClusteredAabb {
@@ -56,6 +56,8 @@ pub struct ClusteredAabb {
     last: (u32, u32),
     /// The transparent pass, for scenes with transparent draws.
     transparency: Option<Transparency>,
+    /// The MSAA edge pass (`--msaa` above 1).
+    edges: Option<[LightCompute<FrameParams>; 2]>,
 }
 
 impl ClusteredAabb {
@@ -64,6 +66,7 @@ impl ClusteredAabb {
         let transparency = Transparency::new(f, gpu, Some(TRANSPARENT_DENSE_GRID)).context("creating the transparent pass")?;
         let mut t = Self::allocate(gpu, &f.params, f.bounds, initial_list_capacity(f.params.num_lights), transparency.is_some()).context("allocating the clustered-aabb buffers")?;
         t.transparency = transparency;
+        t.edges = super::msaa::edge_pipelines(gpu, f.msaa, shaders::kernels::SHADE_EDGES_AABB);
         Ok(t)
     }
 
@@ -72,7 +75,8 @@ impl ClusteredAabb {
     fn allocate(gpu: &Gpu, p: &FrameParams, bounds: &Buffer, capacity: u32, transparent: bool) -> VkResult<Self> {
         let ctx = &gpu.ctx;
         let clusters = cluster_count(&p.grid);
-        let pixels = p.grid.width * p.grid.height;
+        // Every sample may add a cluster with MSAA.
+        let pixels = p.grid.width * p.grid.height * p.grid.samples;
         let slots = if transparent { clusters } else { clusters.min(pixels) };
         let words = |name: &str, n: u32| {
             crate::vk::memory::check_range(ctx, name, 4 * n as u64)?;
@@ -88,13 +92,14 @@ impl ClusteredAabb {
             },
             flags: words("cluster flags", clusters)?,
             active: words("active clusters", slots)?,
-            pixel_clusters: words("pixel clusters", pixels)?,
+            pixel_clusters: words("pixel clusters", p.grid.width * p.grid.height)?,
             offsets: words("light offsets", clusters)?,
             counts: words("light counts", clusters)?,
             list: words("light lists", capacity)?,
             counters: words("counters", COUNTERS)?,
             last: (0, 0),
             transparency: None,
+            edges: None,
         };
         let q = FrameParams { count: clusters, ..*p };
         gpu.run(None, |rec| rec.dispatch_linear(&gpu.kernels.aabb_bounds, &[bounds, &b.boxes], &q, clusters))?;
@@ -160,6 +165,10 @@ impl LightingTechnique for ClusteredAabb {
                 p.grid.height,
             )
         })?;
+        if let (Some(m), Some(pipes)) = (f.msaa, &self.edges) {
+            let buffers = [&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.offsets, &self.counts, &self.list, &self.counters, f.lights, f.materials, f.frame, f.bounds];
+            m.record_edges(rec, pipes, &p, &buffers)?;
+        }
         let Some(t) = &self.transparency else { return Ok(()) };
         // The pre-pass left the depth a depth target.
         let from = ImageUse::DepthTarget;
