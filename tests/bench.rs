@@ -111,8 +111,9 @@ fn bench_bad_input_is_a_one_line_error() {
 
 /// The accuracy study on a tiny frame with 10k lights (enough for llvmpipe's loop limiter to
 /// bite if a test looped per light): the reference setting reproduces the reference, tile
-/// sizes only move time (lists are conservative), a smaller ε is never less accurate, and the
-/// Pareto plot and markdown are written.
+/// sizes only move time (lists are conservative), a smaller ε is never less accurate, 4× MSAA
+/// comes closer to 16× supersampling than one sample, and the Pareto plots and markdown are
+/// written.
 #[test]
 fn tiny_accuracy_study() {
     let dir = TempDir::new("accuracy");
@@ -120,7 +121,12 @@ fn tiny_accuracy_study() {
     let run = manylights(["bench", "--study", "accuracy", "--lights", "10000", "--scenes", "city", "--width", "96", "--height", "54", "--frames", "1", "--out", out]);
     assert!(run.ok, "study failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("accuracy.csv"));
-    assert_eq!(csv.rows.len(), 16, "{:?}", csv.rows);
+    let msaa: Vec<_> = csv.rows().filter(|r| r.get("knob") == "MSAA").collect();
+    assert_eq!(csv.rows.len(), 16 + msaa.len(), "{:?}", csv.rows);
+    // MSAA: one sample and four at least (every device has 4); more samples come closer to the
+    // 16× supersampled reference, so the knob reaches the frame.
+    let msaa_psnr = |prefix: &str| msaa.iter().find(|r| r.get("setting").starts_with(prefix)).unwrap_or_else(|| panic!("no MSAA row {prefix:?}")).num("psnr_db");
+    assert!(msaa_psnr("4 ×") > msaa_psnr("1 ×") + 1.0, "4 samples closer to supersampling than 1: {} vs {} dB", msaa_psnr("4 ×"), msaa_psnr("1 ×"));
     let setting = |prefix: &str| {
         let mut rows = csv.rows().filter(|r| r.get("setting").starts_with(prefix));
         let row = rows.next().unwrap_or_else(|| panic!("no setting {prefix:?}"));
@@ -159,6 +165,7 @@ fn tiny_accuracy_study() {
     let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
     assert!(md.contains("| normal encoding | oct 2×8 |") && md.contains("pareto-city.svg"), "{md}");
     assert!(std::fs::read_to_string(dir.join("pareto-city.svg")).expect("pareto plot").starts_with("<svg"));
+    assert!(std::fs::read_to_string(dir.join("pareto-msaa-city.svg")).expect("MSAA pareto plot").starts_with("<svg"));
 }
 
 /// The OIT knob of the accuracy study, on the glass stack (up to 50 transparent surfaces per

@@ -1,7 +1,7 @@
 //! MSAA (`--msaa N`, `shaders::msaa`) on the local device (lavapipe in CI, whose G-buffers take
 //! 4 samples; every count the device has elsewhere), validation on:
-//! - `deferred --msaa N` against the same view rendered at `N` times the pixels (an `a × b` grid
-//!   per pixel) and box-filtered in linear colour: within the stated tolerance, and with at most
+//! - `deferred --msaa N` against the same view rendered at `k²` ≥ `N` times the pixels (a `k × k`
+//!   grid per pixel, square so the frame keeps its aspect) and box-filtered in linear colour: within the stated tolerance, and with at most
 //!   half as many pixels far off as the one-sample frame;
 //! - the knob reaches the kernels: the frame lists edge pixels, and only those (within 1/255) change;
 //! - only what the frame calls for: `--msaa 1` allocates no buffer of MSAA and one G-buffer plane,
@@ -16,16 +16,12 @@ use host::render::clustered::UniqueClusters;
 use host::render::{Frame, Knob, Settings, Technique};
 use host::scene::lights;
 use shaders::layout::PointLight;
-use shaders::lighting::{decode_srgb8, encode_srgb8};
 
-/// The sub-pixel grid of the `N`× supersampled reference: `N` = columns × rows.
+/// The sub-pixel grid of the supersampled reference for `N` samples: square (the frame keeps its
+/// aspect) with at least `N` pixels per pixel: 2 × 2 for 2 and 4 samples, 3 × 3 for 8.
 fn grid_of(samples: u32) -> (u32, u32) {
-    match samples {
-        2 => (2, 1),
-        4 => (2, 2),
-        8 => (4, 2),
-        _ => (1, 1),
-    }
+    let side = (1..).find(|s| s * s >= samples).unwrap_or(1);
+    (side, side)
 }
 
 /// The counts to test here: those of `--msaa` the device renders.
@@ -34,19 +30,6 @@ fn counts(gpu: &Gpu) -> Vec<u32> {
     let here: Vec<u32> = shaders::msaa::SAMPLE_COUNTS.into_iter().filter(|&n| n > 1 && gpu.ctx.info.msaa_sample_counts & n != 0).collect();
     assert!(here.contains(&4), "{} offers {:#x}: Vulkan requires 4 samples", gpu.ctx.info.name, gpu.ctx.info.msaa_sample_counts);
     here
-}
-
-/// `pixels` of a `(w·a) × (h·b)` frame box-filtered to `w × h`: the mean of each pixel's `a × b`
-/// sub-pixels in linear colour, encoded as sRGB8 as the frames are.
-fn box_filtered(pixels: &[u32], w: u32, h: u32, (a, b): (u32, u32)) -> Vec<u32> {
-    let big_w = w * a;
-    (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let sum = (0..a * b).map(|k| decode_srgb8(pixels[((y * b + k / a) * big_w + x * a + k % a) as usize])).fold(glam::Vec3::ZERO, |s, c| s + c);
-            encode_srgb8(sum / (a * b) as f32)
-        })
-        .collect()
 }
 
 /// Mean over pixels of the largest channel difference (in 1/255), and the share of pixels more
@@ -88,7 +71,7 @@ fn deferred_msaa_matches_the_supersampled_reference() {
     for samples in counts(&gpu) {
         let (a, b) = grid_of(samples);
         let big = frame(&gpu, &scene, &l, &settings(W * a, H * b, Technique::Deferred));
-        let reference = box_filtered(&big.pixels, W, H, (a, b));
+        let reference = host::render::msaa::box_filter(&big.pixels, W, H, (a, b));
         assert!(lit(&reference) * 10 > reference.len(), "the reference should be lit");
         let one = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, 1));
         let ms = frame(&gpu, &scene, &l, &with_msaa(Technique::Deferred, samples));
@@ -193,4 +176,33 @@ fn unsupported_msaa_settings_are_refused_in_one_line() {
     glass.materials[0].opacity = 0.5;
     one_line(render_error(&gpu, &glass, &l, p, &with_msaa(Technique::Deferred, n)), "transparent");
     common::assert_clean(&gpu);
+}
+
+/// `render --msaa`: `--stats` reports the samples, the edge pixels and the bytes per sample (and
+/// nothing of MSAA at one sample); a technique without an edge pass is refused in one line.
+#[test]
+fn render_reports_msaa_in_its_stats() {
+    use common::cli::{assert_one_line_error, manylights};
+    let dir = common::temp::TempDir::new("msaa-stats");
+    let stats = |samples: &str| -> serde_json::Value {
+        let (json, png) = (dir.join(&format!("{samples}.json")), dir.join(&format!("{samples}.png")));
+        let run = manylights([
+            "render", "--scene", "city", "--lights", "300", "--width", "96", "--height", "54", "--technique", "clustered-bvh", "--msaa", samples,
+            "--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap(),
+        ]);
+        assert!(run.ok, "render --msaa {samples} failed:\n{}", run.stderr);
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    };
+    let one = stats("1");
+    assert!(one["msaa"].is_null(), "{}", one["msaa"]);
+    let four = stats("4");
+    let m = &four["msaa"];
+    assert_eq!(m["samples"], 4);
+    assert!(m["edge_pixels"].as_u64().unwrap() > 0);
+    assert_eq!(m["bytes_per_sample"], 36);
+    assert_eq!(m["gbuffer_bytes"], 36 * 4 * 96 * 54);
+    assert!(four["bytes"]["buffers"]["MSAA edge list"].as_u64().unwrap() > 0 && one["bytes"]["buffers"]["MSAA edge list"].is_null());
+    assert!(four["gpu_ms"]["passes"]["edge shading"].as_f64().is_some(), "the edge pass is timed: {}", four["gpu_ms"]["passes"]);
+    let refused = manylights(["render", "--scene", "city", "--lights", "10", "--width", "64", "--height", "36", "--technique", "forward-plus", "--msaa", "4", "--out", dir.join("f.png").to_str().unwrap()]);
+    assert_one_line_error(&refused, "forward-plus with --msaa 4", "--msaa 4");
 }

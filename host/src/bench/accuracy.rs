@@ -34,6 +34,10 @@
 //!    triangles from the exact surface (`scene::nurbs::tessellation_error`, f64, at each patch's
 //!    level as the GPU chose it), timed by the tessellation pass plus the G-buffer (its own
 //!    Pareto plot).
+//! 7. **MSAA** — `--msaa` 1, 2, 4, 8 (the counts the device has) with `clustered-bvh`; reference:
+//!    brute force at 16× the pixels (a 4 × 4 grid per pixel: square, so the frame keeps its
+//!    aspect; more than the 8 samples of the finest setting) box-filtered in linear colour
+//!    (`render::msaa::box_filter`), timed by the whole GPU frame (its own Pareto plot).
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
 use crate::render::transparent::OitVariant;
@@ -63,10 +67,12 @@ pub enum Knob {
     Oit,
     /// 6. NURBS tessellation (scenes with NURBS patches).
     Tessellation,
+    /// 7. MSAA samples per pixel.
+    Msaa,
 }
 
 impl Knob {
-    pub const ALL: [Knob; 6] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation];
+    pub const ALL: [Knob; 7] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation, Knob::Msaa];
 }
 
 impl std::fmt::Display for Knob {
@@ -172,7 +178,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
 pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
     let mut rows = Vec::new();
-    let bar = indicatif::ProgressBar::new((a.scenes.len() * 19) as u64);
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 24) as u64);
     for name in &a.scenes {
         let scene = super::load_scene(name, a)?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
@@ -297,6 +303,19 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 measure(TESS_KNOB, format!("adaptive, {tolerance} px"), &reference, &f, None);
             }
         }
+        // 7: reference = brute force at 16× the pixels, box-filtered.
+        if wants(Knob::Msaa) {
+            let (w, h) = (a.width, a.height);
+            let (cols, rows_per_pixel) = MSAA_REFERENCE_GRID;
+            let mut reference = run(&base, 0, &Settings { width: cols * w, height: rows_per_pixel * h, ..settings(a, Technique::Deferred, a.tile_size, Precision::Oct16) })?;
+            reference.pixels = render::msaa::box_filter(&reference.pixels, w, h, MSAA_REFERENCE_GRID);
+            let here = shaders::msaa::SAMPLE_COUNTS.into_iter().filter(|&n| gpu.ctx.info.msaa_sample_counts & n != 0);
+            for samples in here {
+                let f = run(&base, 0, &Settings { msaa: samples, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) })?;
+                let edges = 100.0 * f.edge_pixels as f64 / (w as f64 * h as f64);
+                measure(MSAA_KNOB, format!("{samples} × ({edges:.1} % edge pixels)"), &reference, &f, None);
+            }
+        }
         let tess_rows = rows.iter_mut().filter(|r| r.scene == *name && r.knob == TESS_KNOB);
         for (r, e) in tess_rows.zip(tess_errors) {
             r.geometric_error = Some(e);
@@ -390,6 +409,10 @@ pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[Path
 const COMPUTE_KNOBS: [&str; 4] = ["normal encoding", "culling test", "tile size", "falloff"];
 const OIT_KNOB: &str = "transparency (OIT)";
 const TESS_KNOB: &str = "tessellation";
+const MSAA_KNOB: &str = "MSAA";
+/// The MSAA knob's reference: this many columns × rows of pixels per pixel (16× supersampling;
+/// square, so the frame keeps its aspect).
+pub const MSAA_REFERENCE_GRID: (u32, u32) = (4, 4);
 
 /// Error (RMSE in 8-bit units, from the PSNR) vs time, one point per setting, the Pareto front
 /// joined: per scene one plot of the compute-time knobs against compute ms and, where the scene
@@ -420,6 +443,13 @@ pub fn pareto_plots(rows: &[AccuracyRow], dir: &Path) -> Result<Vec<PathBuf>> {
             let name = PathBuf::from(format!("pareto-tessellation-{}.svg", slug(scene)));
             let title = format!("{scene}: NURBS tessellation image error vs tessellation + G-buffer time");
             plot(&tess, &[TESS_KNOB], |r| r.tessellation_ms, "tessellation pass + G-buffer ms (median)", &title, &dir.join(&name))?;
+            files.push(name);
+        }
+        let msaa = of(&[MSAA_KNOB]);
+        if !msaa.is_empty() {
+            let name = PathBuf::from(format!("pareto-msaa-{}.svg", slug(scene)));
+            let title = format!("{scene}: MSAA image error (against 16× supersampling) vs frame time");
+            plot(&msaa, &[MSAA_KNOB], |r| r.frame_ms, "GPU frame ms (median)", &title, &dir.join(&name))?;
             files.push(name);
         }
     }

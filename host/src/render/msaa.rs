@@ -99,3 +99,18 @@ impl Multisampling {
 pub fn edge_pipelines(gpu: &Gpu, msaa: Option<&Multisampling>, handles: [Kernel<FrameParams>; 2]) -> Option<[LightCompute<FrameParams>; 2]> {
     msaa.map(|_| handles.map(|k| LightTyped::compute(&gpu.light_compute, k)))
 }
+
+/// `pixels` of a `(w·a) × (h·b)` frame box-filtered to `w × h`: the mean of each pixel's `a × b`
+/// pixels in linear colour, encoded as sRGB8 as frames are (the supersampled reference MSAA is
+/// measured against: `tests/msaa.rs`, the accuracy study).
+pub fn box_filter(pixels: &[u32], w: u32, h: u32, (a, b): (u32, u32)) -> Vec<u32> {
+    use shaders::lighting::{decode_srgb8, encode_srgb8};
+    let wide = w * a;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let sum = (0..a * b).map(|k| decode_srgb8(pixels[((y * b + k / a) * wide + x * a + k % a) as usize])).fold(glam::Vec3::ZERO, |s, c| s + c);
+            encode_srgb8(sum / (a * b) as f32)
+        })
+        .collect()
+}

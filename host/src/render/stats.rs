@@ -41,6 +41,12 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         // Each NURBS patch's tessellation level in the last frame (adaptive levels as the GPU
         // chose them; empty without patches).
         "tess_levels": frame.tess_levels,
+        // MSAA (`--msaa` above 1): samples per pixel, the pixels shaded per sample, and the
+        // G-buffer's bytes per sample (targets and buffers; `render::msaa::bytes_per_sample`).
+        "msaa": (frame.samples > 1).then(|| json!({
+            "samples": frame.samples, "edge_pixels": frame.edge_pixels,
+            "bytes_per_sample": super::msaa::bytes_per_sample(s.normal_precision),
+            "gbuffer_bytes": frame.buffers.iter().find(|b| b.0 == "gbuffer").map(|b| b.1) })),
         "timed_frames": s.frames,
         "gpu_ms": {
             "passes": passes, "pass_queues": queues,
