@@ -91,6 +91,29 @@ pub fn load(path: &Path) -> Result<Scene> {
     })
 }
 
+/// A `uri` without a scheme is a relative path whose percent-encoding the glTF crate decodes
+/// and unwraps as UTF-8: one whose `%XX` bytes are not UTF-8 (`q%AD.bin`) is refused here.
+fn relative_uri_decodes(uri: &str) -> Result<(), String> {
+    if uri.contains(':') {
+        return Ok(());
+    }
+    let (b, mut out, mut k) = (uri.as_bytes(), Vec::with_capacity(uri.len()), 0);
+    while k < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        match (b[k], b.get(k + 1).copied().and_then(hex), b.get(k + 2).copied().and_then(hex)) {
+            (b'%', Some(hi), Some(lo)) => {
+                out.push((hi * 16 + lo) as u8);
+                k += 3;
+            }
+            (c, _, _) => {
+                out.push(c);
+                k += 1;
+            }
+        }
+    }
+    String::from_utf8(out).map(|_| ()).map_err(|_| format!("{uri:?} percent-decodes to bytes that are not UTF-8"))
+}
+
 /// `text` on one line: its lines joined by "; ".
 fn one_line(text: &str) -> String {
     text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ")
@@ -153,6 +176,9 @@ fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String
             gltf::buffer::Source::Uri(u) if !u.starts_with("data:") => format!("buffer {} ({u:?})", b.index()),
             _ => format!("buffer {}", b.index()),
         };
+        if let gltf::buffer::Source::Uri(u) = b.source() {
+            relative_uri_decodes(u).map_err(|e| format!("buffers[{}].uri: {e}", b.index()))?;
+        }
         let data = gltf::buffer::Data::from_source_and_blob(b.source(), Some(base), &mut blob).map_err(|e| format!("{what}: {}", one_line(&e.to_string())))?;
         if data.len() < b.length() {
             return Err(format!("{what}: byteLength is {} but it holds {} bytes", b.length(), data.len()));
@@ -167,7 +193,8 @@ fn import(path: &Path, warn: &mut impl FnMut(String)) -> Result<Imported, String
             // `uri`: an image whose chosen source lacks them has nothing to read.
             let j = &json.images[i.index()];
             let source = match (&j.buffer_view, &j.mime_type, &j.uri) {
-                (Some(_), Some(_), _) | (None, _, Some(_)) => Ok(i.source()),
+                (None, _, Some(u)) => relative_uri_decodes(u).map(|()| i.source()).map_err(|e| format!("its uri: {e}")),
+                (Some(_), Some(_), _) => Ok(i.source()),
                 (Some(_), None, _) => Err("a bufferView without a mimeType".to_string()),
                 (None, _, None) => Err("neither a uri nor a bufferView".to_string()),
             };
