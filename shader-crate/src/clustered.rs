@@ -476,7 +476,7 @@ specular_entries! {
             let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
             shade_cluster::<SPECULAR>(surface, effects, num_lights, lights, &shading::list_range(list, offsets[cluster], counts[cluster]))
         };
-        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, i, bounds, depth, normals, albedo, materials, shade);
     }
 }
 
@@ -511,7 +511,7 @@ specular_entries! {
             let cluster = tile_clusters::cluster_of_key(&grid, records, keys[(s * n + i) as usize]) as usize;
             shade_cluster::<SPECULAR>(surface, effects, num_lights, lights, &shading::list_range(list, offsets[cluster], counts[cluster]))
         };
-        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, i, bounds, depth, normals, albedo, materials, shade);
     }
 }
 

@@ -93,6 +93,6 @@ specular_entries! {
             let touching = if view == VIEW_HEATMAP { lights_meeting(n, lights, |_, _| {}, move |c, r| lighting::in_range(c, r, pos)) } else { 0 };
             (sum, touching)
         };
-        frame[i as usize] = msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+        frame[i as usize] = msaa::shade_edge_pixel(p, i, bounds, depth, normals, albedo, materials, shade);
     }
 }

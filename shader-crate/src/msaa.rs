@@ -145,11 +145,11 @@ pub fn is_edge(near: f32, samples: u32, key: impl Fn(u32) -> SampleKey) -> bool 
 /// The surface of sample `s` of geometry pixel `i` (entry `s·n + i` of the G-buffer buffers,
 /// `n` = `p.count`) at the sample's location.
 #[inline]
-pub fn sample_surface(p: &FrameParams, samples: u32, i: u32, s: u32, depth: &[f32], normals: &[u32], albedo: &[u32], materials: &[MaterialGpu]) -> Surface {
+pub fn sample_surface(p: &FrameParams, i: u32, s: u32, depth: &[f32], normals: &[u32], albedo: &[u32], materials: &[MaterialGpu]) -> Surface {
     let e = s * p.count + i;
     let mut surface = shading::fetch_surface(p, e, depth[e as usize], normals, albedo[e as usize], materials);
     let g = &p.grid;
-    let (ox, oy) = sample_location(samples, s);
+    let (ox, oy) = sample_location(g.samples, s);
     let d = reconstruct::distance_from_depth(g.near, depth[e as usize]);
     surface.pos = reconstruct::sample_position(g, i % g.width, i / g.width, ox, oy, d);
     surface
@@ -162,7 +162,6 @@ pub fn sample_surface(p: &FrameParams, samples: u32, i: u32, s: u32, depth: &[f3
 #[inline]
 pub fn shade_edge_pixel(
     p: &FrameParams,
-    samples: u32,
     i: u32,
     bounds: &[f32],
     depth: &[f32],
@@ -171,13 +170,14 @@ pub fn shade_edge_pixel(
     materials: &[MaterialGpu],
     shade: impl Fn(u32, &Surface) -> (Vec3, u32),
 ) -> u32 {
+    let samples = p.grid.samples;
     let mut sum = Vec3::ZERO;
     let mut s = 0;
     while s < samples {
         sum += if is_sky(p, i, s, depth) {
             background()
         } else {
-            let surface = sample_surface(p, samples, i, s, depth, normals, albedo, materials);
+            let surface = sample_surface(p, i, s, depth, normals, albedo, materials);
             let (radiance, lights) = shade(s, &surface);
             sample_colour(p, bounds, i, &surface, radiance, lights)
         };

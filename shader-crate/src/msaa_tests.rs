@@ -112,7 +112,7 @@ fn edges_are_other_surfaces_and_only_those() {
     let (px, py) = (80, 46);
     let samples: Vec<SampleKey> = (0..4).map(|s| on_plane(&g, px, py, s, floor, -1.0, 7)).collect();
     let d = |k: &SampleKey| near / k.depth;
-    let spread = samples.iter().map(|k| d(k)).fold(0.0f32, f32::max) / samples.iter().map(|k| d(k)).fold(f32::MAX, f32::min);
+    let spread = samples.iter().map(d).fold(0.0f32, f32::max) / samples.iter().map(d).fold(f32::MAX, f32::min);
     assert!(spread > 1.0 + 4.0 * EDGE_DEPTH_RELATIVE, "the test floor should be steep in depth: ×{spread}");
     assert!(!is_edge(near, 4, |s| samples[s as usize]), "one plane, however slanted, is no edge");
     let lower = on_plane(&g, px, py, 1, floor, -1.1, 7);
@@ -142,9 +142,10 @@ fn albedo_words_survive_the_unorm_target() {
 
 #[test]
 fn an_edge_pixel_is_the_mean_of_its_samples_colours() {
-    let p = frame(4, 2);
-    let n = p.count as usize;
     let samples = 4;
+    let mut p = frame(4, 2);
+    p.grid.samples = samples as u32;
+    let n = p.count as usize;
     let i = 5u32;
     let materials = [<MaterialGpu as bytemuck::Zeroable>::zeroed(); 2];
     let mut depth = vec![0.0f32; samples * n];
@@ -159,16 +160,17 @@ fn an_edge_pixel_is_the_mean_of_its_samples_colours() {
         albedo[e] = 0x01_ff_ff_ff;
     }
     let radiance = Vec3::new(0.25, 0.5, 1.0);
-    let colour = shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
+    let colour = shade_edge_pixel(&p, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
     let lit = lighting::decode_srgb8(lighting::encode_srgb8(lighting::tonemap(radiance, p.exposure)));
     let sky = lighting::decode_srgb8(shading::BACKGROUND_RGBA8);
     assert_eq!(colour, lighting::encode_srgb8((lit + sky) * 0.5));
     // Every sample on the surface: the single colour.
-    let colour = shade_edge_pixel(&p, 1, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
+    let single = FrameParams { grid: ClusterGrid { samples: 1, ..p.grid }, ..p };
+    let colour = shade_edge_pixel(&single, i, &[], &depth, &normals, &albedo, &materials, |_, _| (radiance, 0));
     assert_eq!(colour, lighting::encode_srgb8(lit));
     // The shading function sees each sample's own position.
     let seen = core::cell::RefCell::new(Vec::new());
-    shade_edge_pixel(&p, samples as u32, i, &[], &depth, &normals, &albedo, &materials, |_, s| {
+    shade_edge_pixel(&p, i, &[], &depth, &normals, &albedo, &materials, |_, s| {
         seen.borrow_mut().push(s.pos);
         (radiance, 0)
     });

@@ -125,7 +125,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
                 let mut sample = 0;
                 while sample < samples {
                     if !msaa::is_sky(fp, i, sample, depth) {
-                        let surface = msaa::sample_surface(fp, samples, i, sample, depth, normals, albedo, materials);
+                        let surface = msaa::sample_surface(fp, i, sample, depth, normals, albedo, materials);
                         shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[(first + sample) as usize]);
                     }
                     sample += 1;
@@ -149,7 +149,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
                 mean += if msaa::is_sky(fp, i, sample, depth) {
                     msaa::background()
                 } else {
-                    let surface = msaa::sample_surface(fp, samples, i, sample, depth, normals, albedo, materials);
+                    let surface = msaa::sample_surface(fp, i, sample, depth, normals, albedo, materials);
                     let mut sum = sums[(first + sample) as usize];
                     shading::shade_directional_lights::<SPECULAR>(&surface, fp.effects, fp.num_lights, lights, &mut sum);
                     msaa::sample_colour(fp, bounds, i, &surface, sum, out.tile_lights)

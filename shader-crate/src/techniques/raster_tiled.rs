@@ -314,7 +314,7 @@ specular_entries! {
             shading::shade_directional_lights::<SPECULAR>(surface, effects, num_lights, lights, &mut sum);
             (sum, count)
         };
-        frame[i as usize] = crate::msaa::shade_edge_pixel(p, p.grid.samples, i, bounds, depth, normals, albedo, materials, shade);
+        frame[i as usize] = crate::msaa::shade_edge_pixel(p, i, bounds, depth, normals, albedo, materials, shade);
     }
 }
 
