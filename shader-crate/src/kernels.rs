@@ -108,6 +108,10 @@ pub const SHADE_EDGES_DEFERRED: [Kernel<FrameParams>; 2] =
 pub const MSAA_GATHER: Kernel<FrameParams> = linear("msaa::msaa_gather", 4).with_sampled_images(3);
 /// The edge pass's indirect workgroup counts: edges.
 pub const MSAA_EDGE_ARGS: Kernel<()> = Kernel::new("msaa::msaa_edge_args", 1, [1, 1, 1], false);
+/// Forward+ with MSAA (`forward_msaa.rs`): the pre-pass's samples into the depth and winner planes.
+pub const FORWARD_GATHER: Kernel<FrameParams> = linear("forward_msaa::forward_gather", 2).with_sampled_images(2);
+/// Forward+ with MSAA: frame, depth planes, edge count; the colour, normal and albedo targets.
+pub const FORWARD_RESOLVE: Kernel<FrameParams> = linear("forward_msaa::forward_resolve", 3).with_sampled_images(3);
 /// Resolve of the transparent pass: heads, nodes, frame, counters (`transparency`).
 pub const OIT_RESOLVE: Kernel<OitParams> = linear("transparency::oit_resolve", 4);
 /// Resolve of the weighted blended variant: accumulation, revealage, frame.
@@ -212,6 +216,8 @@ pub const ALL: &[Kernel<()>] = &[
     SHADE_EDGES_DEFERRED[1].erased(),
     MSAA_GATHER.erased(),
     MSAA_EDGE_ARGS.erased(),
+    FORWARD_GATHER.erased(),
+    FORWARD_RESOLVE.erased(),
     OIT_RESOLVE.erased(),
     OIT_RESOLVE_WEIGHTED.erased(),
     SCAN_ADD_OFFSETS.erased(),
@@ -317,6 +323,11 @@ pub const FORWARD_DEPTH: [RasterKernel<ForwardParams>; 2] = [
     RasterKernel::new("raster_forward::depth_vs", "raster_forward::depth_fs", 0, 0),
     RasterKernel::new("raster_forward::depth_vs_uv", "raster_forward::depth_fs_masked", 0, 2),
 ];
+/// [`FORWARD_DEPTH`] at `N` samples (`--msaa`, `forward_msaa.rs`): the winning draw as a float.
+pub const FORWARD_DEPTH_MS: [RasterKernel<ForwardParams>; 2] = [
+    RasterKernel::new("raster_forward::depth_vs", "raster_forward_ms::depth_fs_ms", 0, 0),
+    RasterKernel::new("raster_forward::depth_vs_uv", "raster_forward_ms::depth_fs_masked_ms", 0, 2),
+];
 /// Storage buffers of the forward pass's fragment stage: the tile lists (heads and nodes, or
 /// ranges and indices), lights, materials, counters, winning draws.
 pub const FORWARD_FRAGMENT_BUFFERS: u32 = 6;
@@ -332,6 +343,22 @@ pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
         RasterKernel::new("raster::gbuffer_vs", "raster_forward::forward_fs_array", FORWARD_FRAGMENT_BUFFERS, 0),
         RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_textured_array", FORWARD_FRAGMENT_BUFFERS, 1),
         RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked_array", FORWARD_FRAGMENT_BUFFERS, 2),
+    ],
+];
+/// Storage buffers of the multisampled forward pass's fragment stage: [`FORWARD_FRAGMENT_BUFFERS`]
+/// and the pre-pass's depth planes.
+pub const FORWARD_FRAGMENT_BUFFERS_MS: u32 = FORWARD_FRAGMENT_BUFFERS + 1;
+/// [`FORWARD_SHADE`] at `N` samples (`--msaa`, `forward_msaa.rs`).
+pub const FORWARD_SHADE_MS: [[RasterKernel<ForwardParams>; 3]; 2] = [
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_forward_ms::forward_fs_ms", FORWARD_FRAGMENT_BUFFERS_MS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward_ms::forward_fs_textured_ms", FORWARD_FRAGMENT_BUFFERS_MS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward_ms::forward_fs_masked_ms", FORWARD_FRAGMENT_BUFFERS_MS, 2),
+    ],
+    [
+        RasterKernel::new("raster::gbuffer_vs", "raster_forward_ms::forward_fs_ms_array", FORWARD_FRAGMENT_BUFFERS_MS, 0),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward_ms::forward_fs_textured_ms_array", FORWARD_FRAGMENT_BUFFERS_MS, 1),
+        RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward_ms::forward_fs_masked_ms_array", FORWARD_FRAGMENT_BUFFERS_MS, 2),
     ],
 ];
 
@@ -396,6 +423,14 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     FORWARD_SHADE[1][0].fragment,
     FORWARD_SHADE[1][1].fragment,
     FORWARD_SHADE[1][2].fragment,
+    FORWARD_DEPTH_MS[0].fragment,
+    FORWARD_DEPTH_MS[1].fragment,
+    FORWARD_SHADE_MS[0][0].fragment,
+    FORWARD_SHADE_MS[0][1].fragment,
+    FORWARD_SHADE_MS[0][2].fragment,
+    FORWARD_SHADE_MS[1][0].fragment,
+    FORWARD_SHADE_MS[1][1].fragment,
+    FORWARD_SHADE_MS[1][2].fragment,
     TRANSPARENT_KEYS.fragment,
     TRANSPARENT_SHADE[0][0].fragment,
     TRANSPARENT_SHADE[0][1].fragment,

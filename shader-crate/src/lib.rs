@@ -99,6 +99,7 @@ pub mod dense_grid;
 pub mod entries;
 #[cfg(feature = "compute")]
 pub mod forward_plus;
+pub mod forward_msaa;
 pub mod indirect;
 pub mod layout;
 pub mod light_bvh;
@@ -117,6 +118,8 @@ pub mod radix;
 pub mod raster;
 #[cfg(feature = "graphics")]
 pub mod raster_forward;
+#[cfg(feature = "graphics")]
+pub mod raster_forward_ms;
 #[cfg(feature = "graphics")]
 pub mod raster_transparent;
 pub mod reconstruct;

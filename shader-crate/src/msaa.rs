@@ -53,13 +53,13 @@ pub const MAX_SAMPLES: u32 = 8;
 
 /// Vulkan's standard sample locations (`standardSampleLocations`; Vulkan 1.3 §28.4,
 /// "Multisampling") for 1, 2, 4 and 8 samples, in sixteenths of a pixel from its top-left
-/// corner: sample `s` is byte `s` of the pattern, `x | y << 4`. Packed in integers, not arrays:
-/// a choice between constant arrays compiles to a choice between pointers, which SPIR-V for
-/// Vulkan does not have.
-const LOCATIONS_1: u64 = 0x88;
-const LOCATIONS_2: u64 = 0x44_cc;
-const LOCATIONS_4: u64 = 0xea_a2_6e_26;
-const LOCATIONS_8: u64 = 0x1f_fb_71_d3_35_9d_b7_59;
+/// corner: sample `s` is byte `s % 4` of word `s / 4` of the pattern, `x | y << 4`. Packed in
+/// 32-bit integers, not arrays: a choice between constant arrays compiles to a choice between
+/// pointers, which SPIR-V for Vulkan does not have, and the raster module has no 64-bit integers.
+const LOCATIONS_1: u32 = 0x88;
+const LOCATIONS_2: u32 = 0x44_cc;
+const LOCATIONS_4: u32 = 0xea_a2_6e_26;
+const LOCATIONS_8: [u32; 2] = [0x35_9d_b7_59, 0x1f_fb_71_d3];
 
 /// Location of sample `s` of `samples` ([`SAMPLE_COUNTS`]) in sixteenths of a pixel, `(x, y)`
 /// from the pixel's top-left corner (y down, as the framebuffer's rows). Any other count gets the
@@ -69,10 +69,10 @@ pub fn sample_location(samples: u32, s: u32) -> (u32, u32) {
     let (pattern, index) = match samples {
         2 => (LOCATIONS_2, s & 1),
         4 => (LOCATIONS_4, s & 3),
-        8 => (LOCATIONS_8, s & 7),
+        8 => (if s & 4 == 0 { LOCATIONS_8[0] } else { LOCATIONS_8[1] }, s & 3),
         _ => (LOCATIONS_1, 0),
     };
-    let byte = ((pattern >> (8 * index)) & 0xff) as u32;
+    let byte = (pattern >> (8 * index)) & 0xff;
     (byte & 15, byte >> 4)
 }
 
@@ -218,15 +218,22 @@ pub fn pixel_is_edge(p: &FrameParams, i: u32, depth: &[f32], normals: &[u32], al
     let words = octahedral::Precision::from_u32(p.normal_precision).gbuffer_words();
     // `move`: the closure holds values, not pointers to this function's locals (a struct of
     // such pointers is not valid SPIR-V for Vulkan).
-    let (count, precision, samples) = (p.count, p.normal_precision, g.samples);
+    let (count, precision) = (p.count, p.normal_precision);
     let key = move |s: u32| {
         let e = s * count + i;
         let w = if words == 4 { [normals[4 * e as usize], normals[4 * e as usize + 1], normals[4 * e as usize + 2]] } else { [normals[e as usize], 0, 0] };
-        let (ox, oy) = sample_location(samples, s);
-        let ray = reconstruct::sample_position(&g, i % g.width, i / g.width, ox, oy, 1.0);
-        SampleKey { depth: depth[e as usize], normal: decoded_normal(precision, w), albedo: albedo[e as usize], ray }
+        sample_key(&g, precision, i, s, depth[e as usize], w, albedo[e as usize])
     };
-    is_edge(g.near, samples, key)
+    is_edge(g.near, g.samples, key)
+}
+
+/// What [`is_edge`] compares of sample `s` of pixel `i`, from its G-buffer values: the
+/// reversed-Z `depth`, the normal's `words` at `precision` (`PRECISION_*`) and the albedo word.
+#[inline]
+pub fn sample_key(g: &ClusterGrid, precision: u32, i: u32, s: u32, depth: f32, words: [u32; 3], albedo: u32) -> SampleKey {
+    let (ox, oy) = sample_location(g.samples, s);
+    let ray = reconstruct::sample_position(g, i % g.width, i / g.width, ox, oy, 1.0);
+    SampleKey { depth, normal: decoded_normal(precision, words), albedo, ray }
 }
 
 /// The G-buffer albedo word of a fetched `RGBA8_UNORM` texel (the inverse of the target's

@@ -78,7 +78,7 @@ fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
 /// one light per iteration, with the variant the frame-uniform specular bit picks (no specular
 /// code for scenes without specular materials).
 #[inline]
-fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L) -> u32 {
+pub(crate) fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L) -> u32 {
     let mut sum = Vec3::ZERO;
     let count = if f.effects & EFFECT_SPECULAR != 0 {
         let count = shading::shade_lights::<true, false, _>(surface, f.effects, f.num_lights, lights, list, &mut sum);
@@ -92,11 +92,35 @@ fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointL
     lighting::encode_srgb8(shading::lit_colour(f, sum, count))
 }
 
-/// The forward shading of one fragment (module docs): the sum over its tile's list. `ARRAY`
-/// picks the list layout (`render --fp-lists`): `false` linked lists (`tiles` = heads, `entries`
-/// = nodes), `true` arrays (`tiles` = `(offset, count)` pairs, `entries` = light indices). Views:
-/// the shaded image and the heatmap (lights in the tile's list); the other debug views show the
-/// shaded image.
+/// The surface a forward fragment shades at view-space position `pos`: the normal the deferred
+/// passes would read back from the G-buffer (any precision), the albedo as the `RGBA8_UNORM`
+/// target stores it, and the draw's material.
+#[inline]
+pub(crate) fn forward_surface(in_normal: Vec3, front_facing: bool, texel: Vec3, p: &ForwardParams, materials: &[MaterialGpu], pos: Vec3) -> Surface {
+    let facing = if front_facing { in_normal } else { -in_normal };
+    let normal = Vec3::from_array(octahedral::decode(encode_gbuffer_normal(facing, p.draw.normal_precision), Precision::from_u32(p.frame.normal_precision)));
+    let a = Vec3::from_array(p.draw.albedo) * texel;
+    let mat = materials[p.draw.material as usize];
+    Surface { pos, normal, albedo: Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z)), specular: mat.specular, roughness: mat.roughness }
+}
+
+/// `surface` shaded over the list of the tile holding pixel `(px, py)`, as sRGB8. `ARRAY` picks
+/// the list layout (`render --fp-lists`): `false` linked lists (`tiles` = heads, `entries` =
+/// nodes), `true` arrays (`tiles` = `(offset, count)` pairs, `entries` = light indices).
+#[inline]
+pub(crate) fn shade_tile<const ARRAY: bool>(f: &FrameParams, px: u32, py: u32, surface: &Surface, tiles: &[u32], entries: &[u32], lights: &[PointLight]) -> u32 {
+    let (tx, ty) = f.grid.tile_of_pixel(px, py);
+    let tile = (ty * f.grid.tiles_x + tx) as usize;
+    if ARRAY {
+        shade_list(f, surface, lights, &shading::index_range(tiles[2 * tile], tiles[2 * tile + 1], |t| entries[t as usize]))
+    } else {
+        shade_list(f, surface, lights, &shading::linked_lights(tiles[tile], entries))
+    }
+}
+
+/// The forward shading of one fragment (module docs): its surface at the pixel centre and the
+/// fragment's depth, shaded over its tile's list ([`shade_tile`]). Views: the shaded image and the
+/// heatmap (lights in the tile's list); the other debug views show the shaded image.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn forward_colour<const ARRAY: bool>(
@@ -112,31 +136,13 @@ pub fn forward_colour<const ARRAY: bool>(
     counters: &[u32],
 ) -> u32 {
     let f = &p.frame;
-    let g = &f.grid;
     // An overflowed frame is re-run with a larger buffer: draw nothing from a partial list.
     if counters[FP_COUNTER_REFS as usize] > f.light_capacity {
         return BACKGROUND_RGBA8;
     }
     let (px, py) = (frag.x as u32, frag.y as u32);
-    let facing = if front_facing { in_normal } else { -in_normal };
-    // The normal the deferred passes would read back from the G-buffer (any precision).
-    let normal = Vec3::from_array(octahedral::decode(encode_gbuffer_normal(facing, p.draw.normal_precision), Precision::from_u32(f.normal_precision)));
-    let a = Vec3::from_array(p.draw.albedo) * texel;
-    let mat = materials[p.draw.material as usize];
-    let surface = Surface {
-        pos: shading::pixel_position(g, px, py, frag.z),
-        normal,
-        albedo: Vec3::new(unorm8(a.x), unorm8(a.y), unorm8(a.z)),
-        specular: mat.specular,
-        roughness: mat.roughness,
-    };
-    let (tx, ty) = g.tile_of_pixel(px, py);
-    let tile = (ty * g.tiles_x + tx) as usize;
-    if ARRAY {
-        shade_list(f, &surface, lights, &shading::index_range(tiles[2 * tile], tiles[2 * tile + 1], |t| entries[t as usize]))
-    } else {
-        shade_list(f, &surface, lights, &shading::linked_lights(tiles[tile], entries))
-    }
+    let surface = forward_surface(in_normal, front_facing, texel, p, materials, shading::pixel_position(&f.grid, px, py, frag.z));
+    shade_tile::<ARRAY>(f, px, py, &surface, tiles, entries, lights)
 }
 
 variant_entries! {

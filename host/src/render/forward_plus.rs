@@ -20,6 +20,12 @@
 //! list is conservative for both and costs no second culling pass). After step 3 the transparent
 //! pass reads the tile lists and its resolve composites into the frame.
 //!
+//! With `--msaa N` (N > 1; `shaders::forward_msaa` has the steps) step 1 draws at `N` samples
+//! and records each sample's winning triangle, a gather puts depths and winners into per-sample
+//! planes, step 3's fragments write their samples' colours, normal and albedo at `N` samples, and
+//! a resolve applies the deferred techniques' edge rule: the frame equals `deferred --msaa N`.
+//! 60 B per sample ([`shaders::forward_msaa::BYTES_PER_SAMPLE`]); none of it with one sample.
+//!
 //! The node or index buffer's capacity is the one view-dependent size: the culling counter ends
 //! at the light references the frame needs; if that exceeds the buffer, it grows (need + 25 %)
 //! and the frame re-runs.
@@ -31,8 +37,9 @@
 use super::technique::{boxed, grew_together, grown_capacity, initial_list_capacity, Description, FrameInputs, Knob, LightCost, LightingTechnique, ListStats, TransparentDraws};
 use super::transparent::{ClusterInputs, Marks, OpaqueDepth, Transparency, TransparencyStats};
 use super::Draw;
-use crate::gpu::{Gpu, FORWARD_COLOUR_FORMAT};
-use crate::vk::{Attachment, Buffer, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
+use crate::gpu::{Gpu, LightRaster, ALBEDO_FORMAT, FORWARD_COLOUR_FORMAT};
+use crate::vk::{Attachment, Blend, Buffer, ComputePipeline, DepthTest, GraphicsPipeline, Image, ImageUse, LightTyped, Load, Recorder, TargetFormat, VkResult};
+use shaders::kernels;
 use anyhow::{bail, Context as _, Result};
 use shaders::forward_plus::MAX_LIGHTS_LLVMPIPE;
 use shaders::shading::NO_NODE;
@@ -119,8 +126,49 @@ pub const FORWARD_PLUS: Description = Description {
     knobs: &[Knob::FpLists],
     own_kernels: &[],
     own_raster: &[],
-    msaa: false,
+    msaa: true,
 };
+
+/// What `--msaa N` (N > 1) adds (`shaders::forward_msaa`): the pre-pass's and the forward pass's
+/// targets at `N` samples, their pipelines, the gather, the resolve and its edge count.
+struct Multisampled {
+    depth: Image,
+    /// The winning triangle of each sample: its draw and primitive, as floats.
+    winner: Image,
+    /// Each sample's edge colour and its fragment's centre colour (`forward_msaa::colour_texel`).
+    colour: Image,
+    /// The normal and albedo the G-buffer would hold (the resolve's edge rule reads them).
+    normal: Image,
+    albedo: Image,
+    /// Edge pixels of the last frame (one word).
+    edges: Buffer,
+    depth_pipes: [GraphicsPipeline<ForwardParams>; 2],
+    shade_pipes: [LightRaster<ForwardParams>; 3],
+    gather: ComputePipeline<FrameParams>,
+    resolve: ComputePipeline<FrameParams>,
+}
+
+impl Multisampled {
+    fn new(gpu: &Gpu, lists: TileLists, w: u32, h: u32, samples: u32) -> VkResult<Self> {
+        let ctx = &gpu.ctx;
+        let depth = |h: shaders::kernels::RasterKernel<ForwardParams>| GraphicsPipeline::multisampled(ctx, &gpu.graphics_module, h.fragment, h, &[TargetFormat::Rg32Float], DepthTest::NearestWrites, samples);
+        let d = &kernels::FORWARD_DEPTH_MS;
+        let colours = [(TargetFormat::Rgba32Float, Blend::Replace), (super::msaa::NORMAL_FORMAT, Blend::Replace), (ALBEDO_FORMAT, Blend::Replace)];
+        let target = |name: &str, format: TargetFormat| Image::multisampled_target(ctx, name, w, h, format, samples);
+        Ok(Self {
+            depth: target("forward+ depth (samples)", TargetFormat::Depth32)?,
+            winner: target("forward+ winning triangles (samples)", TargetFormat::Rg32Float)?,
+            colour: target("forward+ colour (samples)", TargetFormat::Rgba32Float)?,
+            normal: target("forward+ normal (samples)", super::msaa::NORMAL_FORMAT)?,
+            albedo: target("forward+ albedo (samples)", ALBEDO_FORMAT)?,
+            edges: Buffer::storage(ctx, "forward+ edge count", 4)?,
+            depth_pipes: [depth(d[0])?, depth(d[1])?],
+            shade_pipes: kernels::FORWARD_SHADE_MS[lists.index()].map(|k| LightTyped::raster_multisampled(&gpu.light_graphics, k, &colours, DepthTest::EqualReadOnly, samples)),
+            gather: ComputePipeline::new(ctx, &gpu.compute_module, kernels::FORWARD_GATHER)?,
+            resolve: ComputePipeline::new(ctx, &gpu.compute_module, kernels::FORWARD_RESOLVE)?,
+        })
+    }
+}
 
 pub struct ForwardPlus {
     depth: Image,
@@ -145,6 +193,8 @@ pub struct ForwardPlus {
     last_refs: u32,
     /// Scenes with transparent draws.
     transparent: Option<TransparentTiles>,
+    /// `--msaa` above 1.
+    msaa: Option<Multisampled>,
 }
 
 impl ForwardPlus {
@@ -171,12 +221,23 @@ impl ForwardPlus {
                 Some(TransparentTiles { pass, depths })
             }
         };
+        let samples = g.samples.max(1);
+        let most = shaders::forward_msaa::MAX_DRAWS as u64;
+        let largest = f.geometry.draws.iter().map(|d| d.index_count as u64 / 3).max().unwrap_or(0);
+        if samples > 1 && (f.geometry.draws.len() as u64 >= most || largest >= most) {
+            bail!(
+                "{} draws, the largest of {largest} triangles: with --msaa forward+ records each sample's draw and triangle in a float target, exact below {most} of each",
+                f.geometry.draws.len()
+            );
+        }
         let made = (|| -> VkResult<Self> {
             Ok(Self {
                 depth: Image::target(ctx, "forward+ depth", w, h, TargetFormat::Depth32)?,
                 colour: Image::target(ctx, "forward+ colour", w, h, FORWARD_COLOUR_FORMAT)?,
                 winner: Image::target(ctx, "forward+ winning draw", w, h, FORWARD_COLOUR_FORMAT)?,
-                winners: Buffer::storage(ctx, "winning draws", 4 * w as u64 * h as u64)?,
+                // One word per pixel (the winning draw), or two per sample with MSAA (draw and
+                // primitive, `shaders::forward_msaa`).
+                winners: Buffer::storage(ctx, "winning draws", if samples > 1 { 8 } else { 4 } * w as u64 * h as u64 * samples as u64)?,
                 reversed: Buffer::indices(ctx, "reversed indices", &reversed)?,
                 total_indices: reversed.len() as u32,
                 lists,
@@ -187,6 +248,7 @@ impl ForwardPlus {
                 params: TiledParams { frame: *frame, mode: MODE_TILED, _pad: [0; 3] },
                 last_refs: 0,
                 transparent,
+                msaa: if samples > 1 { Some(Multisampled::new(gpu, lists, w, h, samples)?) } else { None },
             })
         })();
         made.context("allocating the forward+ buffers")
@@ -203,13 +265,15 @@ impl ForwardPlus {
     /// `FORWARD_DEPTH` and `FORWARD_SHADE`), binding `extra` storage buffers after the vertex
     /// stage's and the draw's textures after them.
     ///
-    /// The forward pass (`forward`) draws everything in reverse order: of coplanar fragments,
-    /// which all pass EQUAL, the last one drawn — the first in scene order, the G-buffer's — stays.
-    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, pipes: &[&GraphicsPipeline<ForwardParams>], extra: &[&Buffer], forward: bool) -> VkResult<()> {
+    /// The one-sample forward pass (`reversed`, over [`ForwardPlus::reversed`]) draws everything
+    /// in reverse order: of coplanar fragments, which all pass EQUAL, the last one drawn — the
+    /// first in scene order, the G-buffer's — stays. The multisampled one keeps the scene order:
+    /// its fragments write only the samples the pre-pass gave their triangle.
+    fn draw_all(&self, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, pipes: &[&GraphicsPipeline<ForwardParams>], extra: &[&Buffer], forward: bool, reversed: bool) -> VkResult<()> {
         let draws: Vec<(usize, &Draw)> = f.geometry.draws.iter().enumerate().filter(|(_, d)| d.index_count > 0).collect();
-        let order: Vec<(usize, &Draw)> = if forward { draws.into_iter().rev().collect() } else { draws };
+        let order: Vec<(usize, &Draw)> = if reversed { draws.into_iter().rev().collect() } else { draws };
         for (index, draw) in order {
-            let first_index = if forward { self.total_indices - draw.first_index - draw.index_count } else { draw.first_index };
+            let first_index = if reversed { self.total_indices - draw.first_index - draw.index_count } else { draw.first_index };
             // Pre-pass: opaque (0) or alpha-tested (1); forward: the G-buffer's variant index.
             let (variant, textures) = match (forward, draw.variant()) {
                 (false, 2) => (1, 2),
@@ -257,13 +321,16 @@ impl ForwardPlus {
 
 impl LightingTechnique for ForwardPlus {
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
+        if let Some(m) = &self.msaa {
+            return self.record_multisampled(gpu, rec, f, m);
+        }
         let raster = &gpu.raster;
         rec.pass("depth pre-pass", |rec| {
             rec.transition(&self.depth, ImageUse::Undefined, ImageUse::DepthTarget);
             rec.transition(&self.winner, ImageUse::Undefined, ImageUse::ColourTarget);
             let winner = Attachment { image: &self.winner, load: Load::ClearU32([u32::MAX, 0, 0, 0]) };
             rec.begin_rendering(&[winner], Attachment { image: &self.depth, load: Load::ClearDepth(0.0) }, &f.geometry.indices);
-            self.draw_all(rec, f, &raster.forward_depth.each_ref(), &[], false)?;
+            self.draw_all(rec, f, &raster.forward_depth.each_ref(), &[], false, false)?;
             rec.end_rendering();
             rec.transition(&self.winner, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.transition(&self.depth, ImageUse::DepthTarget, ImageUse::CopySource);
@@ -278,26 +345,7 @@ impl LightingTechnique for ForwardPlus {
                 None => Ok(()),
             }
         })?;
-        rec.pass("culling", |rec| {
-            if self.lists == TileLists::Linked {
-                rec.fill(&self.tiles, NO_NODE);
-            }
-            rec.fill(&self.counters, 0);
-            let g = &self.params.frame.grid;
-            let p = TiledParams { frame: FrameParams { light_capacity: self.capacity, ..self.params.frame }, ..self.params };
-            let buffers = [&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries];
-            match &self.transparent {
-                None => rec.dispatch(gpu.kernels.forward_plus_cull[self.lists.index()].get(p.frame.effects)?, &buffers, &p, [g.tiles_x, g.tiles_y, 1])?,
-                Some(t) => {
-                    let widened: Vec<&Buffer> = buffers.into_iter().chain([&t.depths]).collect();
-                    rec.dispatch(gpu.kernels.forward_plus_cull_widened[self.lists.index()].get(p.frame.effects)?, &widened, &p, [g.tiles_x, g.tiles_y, 1])?
-                }
-            }
-            // The lists (and the counter) are read by the forward pass's fragments; every
-            // workgroup writes its tile's range (`array`), so only the heads need a fill.
-            rec.fragments_read_earlier_writes();
-            Ok(())
-        })?;
+        self.record_culling(gpu, rec, f)?;
         rec.pass("shading", |rec| {
             rec.transition(&self.colour, ImageUse::Undefined, ImageUse::ColourTarget);
             let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::shading::BACKGROUND_RGBA8, 0, 0, 0]) };
@@ -305,7 +353,7 @@ impl LightingTechnique for ForwardPlus {
             let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners];
             // The variants for the frame's light types.
             let [a, b, c] = raster.forward_shade[self.lists.index()].each_ref().map(|v| v.get(self.params.frame.effects));
-            self.draw_all(rec, f, &[a?, b?, c?], &extra, true)?;
+            self.draw_all(rec, f, &[a?, b?, c?], &extra, true, true)?;
             rec.end_rendering();
             rec.transition(&self.colour, ImageUse::ColourTarget, ImageUse::CopySource);
             rec.copy_to_buffers(&[(&self.colour, f.frame)]);
@@ -320,6 +368,17 @@ impl LightingTechnique for ForwardPlus {
     fn grow_if_needed(&mut self, gpu: &Gpu) -> Result<Option<String>> {
         let nodes = Transparency::grow(self.transparent.as_mut().map(|t| &mut t.pass), &gpu.ctx)?;
         Ok(grew_together(nodes, self.grow_entries(gpu)?))
+    }
+
+    fn msaa_bytes_per_sample(&self) -> Option<u64> {
+        Some(shaders::forward_msaa::BYTES_PER_SAMPLE)
+    }
+
+    fn msaa_edge_pixels(&mut self) -> VkResult<Option<u32>> {
+        match &mut self.msaa {
+            Some(m) => Ok(Some(m.edges.read::<u32>(1)?[0])),
+            None => Ok(None),
+        }
     }
 
     fn transparency(&self) -> Option<TransparencyStats> {
@@ -347,11 +406,87 @@ impl LightingTechnique for ForwardPlus {
             (self.reversed.name.clone(), self.reversed.size),
             ("forward+ targets".into(), targets),
         ];
+        if self.msaa.is_some() {
+            // The targets at `N` samples (the planes are in `winners` and the G-buffer's depth).
+            v.push(("forward+ targets (samples)".into(), g.samples as u64 * g.width as u64 * g.height as u64 * (shaders::forward_msaa::BYTES_PER_SAMPLE - 8)));
+            v.push(("forward+ edge count".into(), 4));
+        }
         if let Some(t) = &self.transparent {
             v.push((t.depths.name.clone(), t.depths.size));
             v.extend(t.pass.buffers());
         }
         v
+    }
+}
+
+impl ForwardPlus {
+    /// Step 2: the tile lists (the tile bounds span every sample with `--msaa`).
+    fn record_culling(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
+        rec.pass("culling", |rec| {
+            if self.lists == TileLists::Linked {
+                rec.fill(&self.tiles, NO_NODE);
+            }
+            rec.fill(&self.counters, 0);
+            let g = &self.params.frame.grid;
+            let p = TiledParams { frame: FrameParams { light_capacity: self.capacity, ..self.params.frame }, ..self.params };
+            let buffers = [&f.targets.depth_buf, f.lights, &self.counters, &self.tiles, &self.entries];
+            match &self.transparent {
+                None => rec.dispatch(gpu.kernels.forward_plus_cull[self.lists.index()].get(p.frame.effects)?, &buffers, &p, [g.tiles_x, g.tiles_y, 1])?,
+                Some(t) => {
+                    let widened: Vec<&Buffer> = buffers.into_iter().chain([&t.depths]).collect();
+                    rec.dispatch(gpu.kernels.forward_plus_cull_widened[self.lists.index()].get(p.frame.effects)?, &widened, &p, [g.tiles_x, g.tiles_y, 1])?
+                }
+            }
+            // The lists (and the counter) are read by the forward pass's fragments; every
+            // workgroup writes its tile's range (`array`), so only the heads need a fill.
+            rec.fragments_read_earlier_writes();
+            Ok(())
+        })
+    }
+
+    /// The frame at `N` samples (`shaders::forward_msaa` steps 1–5); scenes with transparent
+    /// draws are refused with MSAA before this is created.
+    fn record_multisampled(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>, m: &Multisampled) -> VkResult<()> {
+        let p = self.params.frame;
+        rec.pass("depth pre-pass", |rec| {
+            rec.transition(&m.depth, ImageUse::Undefined, ImageUse::DepthTarget);
+            rec.transition(&m.winner, ImageUse::Undefined, ImageUse::ColourTarget);
+            let winner = Attachment { image: &m.winner, load: Load::ClearF32([-1.0; 4]) };
+            rec.begin_rendering(&[winner], Attachment { image: &m.depth, load: Load::ClearDepth(0.0) }, &f.geometry.indices);
+            self.draw_all(rec, f, &m.depth_pipes.each_ref(), &[], false, false)?;
+            rec.end_rendering();
+            rec.transition(&m.winner, ImageUse::ColourTarget, ImageUse::KernelRead);
+            rec.transition(&m.depth, ImageUse::DepthTarget, ImageUse::KernelRead);
+            rec.dispatch_linear_reading(&m.gather, &[&f.targets.depth_buf, &self.winners], &[&m.depth, &m.winner], &p, p.count)?;
+            rec.transition(&m.depth, ImageUse::KernelRead, ImageUse::DepthTarget);
+            Ok(())
+        })?;
+        self.record_culling(gpu, rec, f)?;
+        rec.pass("shading", |rec| {
+            let targets = [&m.colour, &m.normal, &m.albedo];
+            for t in targets {
+                rec.transition(t, ImageUse::Undefined, ImageUse::ColourTarget);
+            }
+            // Sky samples keep the background: its linear colour as the edge colour, its word as
+            // the centre colour (`forward_msaa::colour_texel`).
+            let bg = shaders::shading::BACKGROUND_RGBA8;
+            let background = shaders::forward_msaa::colour_texel(shaders::lighting::decode_srgb8(bg), bg).to_array();
+            let attachments = [
+                Attachment { image: &m.colour, load: Load::ClearF32(background) },
+                Attachment { image: &m.normal, load: Load::ClearF32([0.0; 4]) },
+                Attachment { image: &m.albedo, load: Load::ClearF32([0.0; 4]) },
+            ];
+            rec.begin_rendering(&attachments, Attachment { image: &m.depth, load: Load::Keep }, &f.geometry.indices);
+            let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners, &f.targets.depth_buf];
+            let [a, b, c] = m.shade_pipes.each_ref().map(|v| v.get(p.effects));
+            self.draw_all(rec, f, &[a?, b?, c?], &extra, true, false)?;
+            rec.end_rendering();
+            for t in targets {
+                rec.transition(t, ImageUse::ColourTarget, ImageUse::KernelRead);
+            }
+            rec.fill(&m.edges, 0);
+            rec.dispatch_linear_reading(&m.resolve, &[f.frame, &f.targets.depth_buf, &m.edges], &targets, &p, p.count)
+        })
     }
 }
 

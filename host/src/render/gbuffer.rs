@@ -172,11 +172,15 @@ pub struct Targets {
 impl Targets {
     /// Targets for `width × height` pixels of `samples` samples and normals at `precision`
     /// (`PRECISION_*`).
-    pub fn new(ctx: &Context, width: u32, height: u32, precision: u32, samples: u32) -> VkResult<Self> {
+    ///
+    /// `depth_planes` (at least `samples`) sizes the depth buffer alone: a technique that
+    /// multisamples targets of its own (Forward+) keeps a plane per sample there.
+    pub fn new(ctx: &Context, width: u32, height: u32, precision: u32, samples: u32, depth_planes: u32) -> VkResult<Self> {
         let n = width as u64 * height as u64 * samples.max(1) as u64;
+        let depth_n = width as u64 * height as u64 * depth_planes.max(samples).max(1) as u64;
         let normal_target = normal_target(precision);
         let normal_words = Precision::from_u32(precision).gbuffer_words() as u64;
-        crate::vk::memory::check_range(ctx, "G-buffer", 4 * n)?;
+        crate::vk::memory::check_range(ctx, "G-buffer", 4 * depth_n)?;
         crate::vk::memory::check_range(ctx, "G-buffer normals", 4 * normal_words * n)?;
         let target = |name: &str, format: TargetFormat| match samples {
             0 | 1 => Image::target(ctx, name, width, height, format),
@@ -190,7 +194,7 @@ impl Targets {
             depth: target("gbuffer depth", TargetFormat::Depth32)?,
             normal: target("gbuffer normal", normal_format)?,
             albedo: target("gbuffer albedo", ALBEDO_FORMAT)?,
-            depth_buf: Buffer::storage(ctx, "gbuffer depth", 4 * n)?,
+            depth_buf: Buffer::storage(ctx, "gbuffer depth", 4 * depth_n)?,
             normal_buf: Buffer::storage(ctx, "gbuffer normals", 4 * normal_words * n)?,
             normal_target,
             albedo_buf: Buffer::storage(ctx, "gbuffer albedo", 4 * n)?,
@@ -201,7 +205,8 @@ impl Targets {
         let buffers = self.depth_buf.size + self.normal_buf.size + self.albedo_buf.size;
         // One sample: the targets hold what their buffers hold. More: `msaa::bytes_per_sample`.
         match self.samples {
-            1 => 2 * buffers,
+            // The targets hold one plane of what the buffers hold (whose depth may hold more).
+            1 => buffers + self.width as u64 * self.height as u64 * 4 + self.normal_buf.size + self.albedo_buf.size,
             n => buffers + n as u64 * self.width as u64 * self.height as u64 * (4 + 16 + 4),
         }
     }

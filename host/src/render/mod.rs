@@ -258,6 +258,8 @@ pub struct Frame {
     pub samples: u32,
     /// Pixels the last frame shaded per sample (MSAA edge pixels; 0 with one sample).
     pub edge_pixels: u32,
+    /// Bytes per sample of the frame's multisampled targets and buffers (`--stats`).
+    pub bytes_per_sample: u64,
 }
 
 impl Frame {

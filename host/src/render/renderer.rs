@@ -119,6 +119,8 @@ struct TechReport {
     buffers: Vec<(String, u64)>,
     cluster_lists: Option<ClusterLists>,
     tile_lists: Vec<Vec<u32>>,
+    msaa_bytes_per_sample: Option<u64>,
+    msaa_edge_pixels: Option<u32>,
 }
 
 fn tech_report(tech: &mut dyn LightingTechnique, read_back: bool) -> Result<TechReport> {
@@ -128,6 +130,8 @@ fn tech_report(tech: &mut dyn LightingTechnique, read_back: bool) -> Result<Tech
         buffers: tech.buffers(),
         cluster_lists: if read_back { tech.cluster_lists()? } else { None },
         tile_lists: if read_back { tech.tile_lists()?.unwrap_or_default() } else { Vec::new() },
+        msaa_bytes_per_sample: tech.msaa_bytes_per_sample(),
+        msaa_edge_pixels: tech.msaa_edge_pixels()?,
     })
 }
 
@@ -175,8 +179,11 @@ impl Renderer {
         let (geometry, tessellation, indices) = super::nurbs::upload_geometry(gpu, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
         let camera = Buffer::from_slice(ctx, "camera", &[gbuffer::raster_camera(scene.view.rotation(), scene.fov_y_radians, aspect, scene.near)])?;
-        let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code(), s.msaa).context("allocating the G-buffer")?;
-        let msaa = super::msaa::Multisampling::new(gpu, s.msaa, n as u64).context("creating the MSAA passes")?;
+        // A technique without the G-buffer pass (Forward+) multisamples its own targets: the
+        // G-buffer's then stay one-sample, and only its depth buffer holds a plane per sample.
+        let gbuffer_samples = if s.technique.description().gbuffer { s.msaa } else { 1 };
+        let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code(), gbuffer_samples, s.msaa).context("allocating the G-buffer")?;
+        let msaa = super::msaa::Multisampling::new(gpu, gbuffer_samples, n as u64).context("creating the MSAA passes")?;
         let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
         let records = light_records(&scene.view, &lights_view, scene.spots, scene.directional)?;
         let lights = Buffer::from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
@@ -467,10 +474,12 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
             Some(t) => t.levels()?,
             None => Vec::new(),
         },
-        samples: res.targets.samples,
-        edge_pixels: match &mut res.msaa {
-            Some(m) => m.edge_pixels()?,
-            None => 0,
+        samples: res.grid.samples,
+        bytes_per_sample: r.msaa_bytes_per_sample.unwrap_or_else(|| super::msaa::bytes_per_sample(res.settings.normal_precision)),
+        edge_pixels: match (&mut res.msaa, r.msaa_edge_pixels) {
+            (_, Some(n)) => n,
+            (Some(m), None) => m.edge_pixels()?,
+            (None, None) => 0,
         },
     })
 }

@@ -42,10 +42,11 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         // chose them; empty without patches).
         "tess_levels": frame.tess_levels,
         // MSAA (`--msaa` above 1): samples per pixel, the pixels shaded per sample, and the
-        // G-buffer's bytes per sample (targets and buffers; `render::msaa::bytes_per_sample`).
+        // bytes per sample of the multisampled targets and buffers (the G-buffer's,
+        // `render::msaa::bytes_per_sample`, or the technique's own).
         "msaa": (frame.samples > 1).then(|| json!({
             "samples": frame.samples, "edge_pixels": frame.edge_pixels,
-            "bytes_per_sample": super::msaa::bytes_per_sample(s.normal_precision),
+            "bytes_per_sample": frame.bytes_per_sample,
             "gbuffer_bytes": frame.buffers.iter().find(|b| b.0 == "gbuffer").map(|b| b.1) })),
         "timed_frames": s.frames,
         "gpu_ms": {

@@ -220,6 +220,18 @@ pub trait LightingTechnique {
         Ok(ListStats::default())
     }
 
+    /// Bytes per sample of the targets and buffers it multisamples itself (`None`: the
+    /// G-buffer's, `msaa::bytes_per_sample`).
+    fn msaa_bytes_per_sample(&self) -> Option<u64> {
+        None
+    }
+
+    /// Edge pixels of the last frame where it classifies them itself (`None`: the multisampled
+    /// G-buffer's edge list counts them, `msaa.rs`).
+    fn msaa_edge_pixels(&mut self) -> VkResult<Option<u32>> {
+        Ok(None)
+    }
+
     /// What the transparent pass of the last frame did (`None`: the frame had none).
     fn transparency(&self) -> Option<super::transparent::TransparencyStats> {
         None

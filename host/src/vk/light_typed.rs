@@ -82,4 +82,10 @@ impl<P: 'static> LightTyped<GraphicsPipeline<P>> {
         let colours = colours.to_vec();
         Self::with(modules, Box::new(move |m| GraphicsPipeline::blended(&m.ctx, m, kernel.fragment, kernel, &colours, depth)))
     }
+
+    /// [`LightTyped::raster`] for targets of `samples` samples per pixel.
+    pub fn raster_multisampled(modules: &Arc<LightTypedModules>, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest, samples: u32) -> Self {
+        let colours = colours.to_vec();
+        Self::with(modules, Box::new(move |m| GraphicsPipeline::blended_multisampled(&m.ctx, m, kernel.fragment, kernel, &colours, depth, samples)))
+    }
 }

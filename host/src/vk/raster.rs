@@ -24,6 +24,8 @@ pub enum TargetFormat {
     Rgba32Float,
     /// One 32-bit float (weighted blended OIT's revealage).
     R32Float,
+    /// Two 32-bit floats (Forward+'s winning triangles with MSAA).
+    Rg32Float,
 }
 
 impl TargetFormat {
@@ -35,6 +37,7 @@ impl TargetFormat {
             Self::Depth32 => vk::Format::D32_SFLOAT,
             Self::Rgba32Float => vk::Format::R32G32B32A32_SFLOAT,
             Self::R32Float => vk::Format::R32_SFLOAT,
+            Self::Rg32Float => vk::Format::R32G32_SFLOAT,
         }
     }
 
@@ -46,6 +49,7 @@ impl TargetFormat {
     pub fn bytes(self) -> u64 {
         match self {
             Self::Rgba32Uint | Self::Rgba32Float => 16,
+            Self::Rg32Float => 8,
             _ => 4,
         }
     }
@@ -104,6 +108,11 @@ impl<P> GraphicsPipeline<P> {
     pub fn multisampled(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[TargetFormat], depth: DepthTest, samples: u32) -> VkResult<Self> {
         let replace: Vec<(TargetFormat, Blend)> = colours.iter().map(|&c| (c, Blend::Replace)).collect();
         Self::with_samples(ctx, module, name, kernel, &replace, depth, samples)
+    }
+
+    /// [`GraphicsPipeline::blended`] for targets of `samples` samples per pixel.
+    pub fn blended_multisampled(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest, samples: u32) -> VkResult<Self> {
+        Self::with_samples(ctx, module, name, kernel, colours, depth, samples)
     }
 
     fn with_samples(ctx: &Context, module: &ShaderModule, name: &str, kernel: RasterKernel<P>, colours: &[(TargetFormat, Blend)], depth: DepthTest, samples: u32) -> VkResult<Self> {
