@@ -58,6 +58,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         oit: Default::default(),
         dispatch_times: false,
         msaa: 1,
+        light_record: Default::default(),
     }
 }
 

@@ -11,15 +11,16 @@
 //! - the largest per-pixel buffer (the G-buffer normals: 4 or 16 bytes per pixel) within
 //!   `maxStorageBufferRange`, and the G-buffer plus frame ([`frame_bytes_per_pixel`]) within the
 //!   largest device-local heap;
-//! - lights: 32 bytes each within `maxStorageBufferRange`, at most `lights::MAX_LIGHTS`, and on
+//! - lights: 32 bytes each (16 with `--light-record compact`) within `maxStorageBufferRange`,
+//!   at most `lights::MAX_LIGHTS`, and on
 //!   lavapipe the loop limiter's bound of the technique ([`max_lights`]).
 use crate::bail_input;
+use crate::render::light_record::LightRecord;
 use crate::render::Technique;
 use crate::scene::lights::MAX_LIGHTS;
 use crate::vk::DeviceInfo;
 use anyhow::Result;
 use shaders::cluster_key::{MAX_DIMENSION, MAX_TILE_SIZE};
-use shaders::layout::PointLight;
 use shaders::octahedral::Precision;
 
 /// Bytes per pixel every technique allocates at least: the G-buffer's depth, normal and albedo
@@ -115,13 +116,18 @@ pub fn is_llvmpipe(info: &DeviceInfo) -> bool {
     info.driver_name.to_lowercase().contains("llvmpipe")
 }
 
-/// The most lights `technique` takes on this device, and the limit that sets it.
-pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u64, String) {
+/// The most lights `technique` takes on this device in `record`s, and the limit that sets it.
+pub fn max_lights(info: &DeviceInfo, technique: Technique, record: LightRecord, tile_size: u32) -> (u64, String) {
     let range = info.max_storage_buffer_range as u64;
+    let more = match record {
+        LightRecord::Full => "; --light-record compact holds twice as many",
+        LightRecord::Compact => "",
+    };
     let mut limits = vec![
-        (MAX_LIGHTS as u64, "the renderer's limit (2 GiB of lights)".to_string()),
-        (range / std::mem::size_of::<PointLight>() as u64, format!(
-            "32-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange {}, kept below 2 GiB)",
+        (MAX_LIGHTS as u64, "the renderer's limit (2^27 − 4 lights: 2 GiB of 16-byte records)".to_string()),
+        (record.max_lights_in(range), format!(
+            "{}-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange {}, kept below 2 GiB){more}",
+            record.bytes_per_light(),
             info.name,
             mib(range),
             mib(info.reported_storage_buffer_range as u64)
@@ -136,8 +142,8 @@ pub fn max_lights(info: &DeviceInfo, technique: Technique, tile_size: u32) -> (u
 
 /// Checks `n` lights for `technique`; `what` names where the count came from (`--lights 5000`,
 /// `scene x.toml's lights`).
-pub fn check_lights(info: &DeviceInfo, technique: Technique, tile_size: u32, n: u64, what: &str) -> Result<()> {
-    let (max, why) = max_lights(info, technique, tile_size);
+pub fn check_lights(info: &DeviceInfo, technique: Technique, record: LightRecord, tile_size: u32, n: u64, what: &str) -> Result<()> {
+    let (max, why) = max_lights(info, technique, record, tile_size);
     if n > max {
         bail_input!("{what}: {n} lights, but {} takes at most {max} here ({why})", technique.name());
     }
@@ -212,20 +218,28 @@ mod tests {
         // light off the renderer's 2^26, refused in one line before anything is allocated.
         for reported in [u32::MAX, 1 << 31] {
             let gpu = device("NVIDIA", reported, 32768, 80 << 30);
-            let (n, why) = max_lights(&gpu, Technique::Tiled, 32);
-            assert_eq!(n, MAX_LIGHTS as u64 - 1, "{why}");
-            check_lights(&gpu, Technique::ClusteredBvh, 32, n, "--lights 67108863").unwrap();
-            let e = err(check_lights(&gpu, Technique::ClusteredBvh, 32, MAX_LIGHTS as u64, "--lights 67108864"));
+            let (n, why) = max_lights(&gpu, Technique::Tiled, LightRecord::Full, 32);
+            assert_eq!(n, (1 << 26) - 1, "{why}");
+            check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, n, "--lights 67108863").unwrap();
+            let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, 1 << 26, "--lights 67108864"));
             assert!(e.starts_with("--lights 67108864: 67108864 lights, but clustered-bvh takes at most 67108863 here (32-byte lights in one buffer") && !e.contains('\n'), "{e}");
+            assert!(e.contains("--light-record compact holds twice as many"), "{e}");
+            // Compact records: 2^27 − 4 lights (a header record, two lights per 32 bytes, below 2^31 bytes).
+            let (n, why) = max_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32);
+            assert_eq!(n, MAX_LIGHTS as u64, "{why}");
+            assert_eq!(n, (1 << 27) - 4);
+            check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, 100_000_000, "--lights 100000000").unwrap();
+            let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, n + 1, "--lights 134217725"));
+            assert!(e.starts_with("--lights 134217725: 134217725 lights, but clustered-bvh takes at most 134217724 here"), "{e}");
         }
         let lavapipe = device("llvmpipe", 128 << 20, 16384, 1 << 30);
-        assert_eq!(max_lights(&lavapipe, Technique::ClusteredBvh, 32).0, 400_000);
-        assert_eq!(max_lights(&lavapipe, Technique::Tiled, 32).0, 100_000);
-        assert_eq!(max_lights(&lavapipe, Technique::ForwardPlus, 16).0, 65_535);
+        assert_eq!(max_lights(&lavapipe, Technique::ClusteredBvh, LightRecord::Full, 32).0, 400_000);
+        assert_eq!(max_lights(&lavapipe, Technique::Tiled, LightRecord::Full, 32).0, 100_000);
+        assert_eq!(max_lights(&lavapipe, Technique::ForwardPlus, LightRecord::Full, 16).0, 65_535);
         let tiny = device("x", 32 << 10, 16384, 1 << 30);
-        assert_eq!(max_lights(&tiny, Technique::Deferred, 32).0, 1024, "32 KiB of 32-byte lights");
-        check_lights(&lavapipe, Technique::Deferred, 32, 400_000, "--lights 400000").unwrap();
-        let e = err(check_lights(&lavapipe, Technique::Deferred, 32, 400_001, "--lights 400001"));
+        assert_eq!(max_lights(&tiny, Technique::Deferred, LightRecord::Full, 32).0, 1024, "32 KiB of 32-byte lights");
+        check_lights(&lavapipe, Technique::Deferred, LightRecord::Full, 32, 400_000, "--lights 400000").unwrap();
+        let e = err(check_lights(&lavapipe, Technique::Deferred, LightRecord::Full, 32, 400_001, "--lights 400001"));
         assert!(e.starts_with("--lights 400001: 400001 lights, but deferred takes at most 400000 here (lavapipe's loop limiter"), "{e}");
     }
 }

@@ -107,6 +107,11 @@ pub struct RenderArgs {
     /// once; techniques without a per-sample edge pass refuse more than 1.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub msaa: u32,
+    /// How the light buffer stores point lights: `full` 32-byte records (exact; at most
+    /// 2^26 − 1 lights), or `compact` 16-byte ones (fixed-point position in the lights' box,
+    /// 24-bit radius, shared-exponent colour; up to 2^27 − 4 lights; point lights only).
+    #[arg(long, value_enum, default_value_t = crate::render::light_record::LightRecord::Full)]
+    pub light_record: crate::render::light_record::LightRecord,
     /// Directory holding sponza/ and bunny/.
     #[arg(long, env = "MANYLIGHTS_ASSETS", default_value = "../shared/assets")]
     pub assets: PathBuf,
@@ -133,6 +138,7 @@ impl RenderArgs {
             oit: self.oit,
             dispatch_times: self.dispatch_times,
             msaa: self.msaa,
+            light_record: self.light_record,
         }
     }
 }
@@ -146,7 +152,7 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     preflight::check_frame(info, f.width, f.height, f.tile_size, a.normal_precision)?;
     preflight::check_tile_for(a.technique, f.tile_size)?;
     preflight::check_msaa(info, a.technique, a.msaa, f.width, f.height, a.normal_precision)?;
-    preflight::check_lights(info, a.technique, f.tile_size, a.lights as u64, &format!("--lights {}", a.lights))?;
+    preflight::check_lights(info, a.technique, a.light_record, f.tile_size, a.lights as u64, &format!("--lights {}", a.lights))?;
     check_output_dir("--out", &f.out)?;
     if let Some(stats) = &a.stats {
         check_output_dir("--stats", stats)?;
@@ -165,7 +171,7 @@ pub fn check_args(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
 fn check_scene(gpu: &Gpu, a: &RenderArgs, scene: &Scene) -> Result<()> {
     let info = &gpu.ctx.info;
     let what = format!("scene {:?}", a.scene);
-    preflight::check_lights(info, a.technique, a.frame.tile_size, scene.lights.len() as u64, &what)?;
+    preflight::check_lights(info, a.technique, a.light_record, a.frame.tile_size, scene.lights.len() as u64, &what)?;
     let max = info.max_image_dimension_2d;
     if let Some(t) = scene.textures.iter().find(|t| t.width > max || t.height > max) {
         bail_input!("{what}: texture {} is {}x{}; {} takes textures of at most {max}x{max} (maxImageDimension2D)", t.path.display(), t.width, t.height, info.name);
@@ -183,7 +189,7 @@ fn check_description(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     // A file that does not parse is reported by `Scene::load`, with its line.
     let parsed = std::fs::read_to_string(path).map_err(anyhow::Error::from).and_then(|text| description::parse(&text, path));
     match parsed {
-        Ok(d) => preflight::check_lights(&gpu.ctx.info, a.technique, a.frame.tile_size, d.light_count() as u64, &format!("scene {:?}", a.scene)),
+        Ok(d) => preflight::check_lights(&gpu.ctx.info, a.technique, a.light_record, a.frame.tile_size, d.light_count() as u64, &format!("scene {:?}", a.scene)),
         Err(_) => Ok(()),
     }
 }

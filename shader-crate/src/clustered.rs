@@ -335,14 +335,14 @@ pub fn for_each_cluster_light(p: &FrameParams, bounds: &[f32], lights: &[PointLi
         };
     }
     if mode == 0 {
-        return lights_meeting(p.num_lights, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb));
+        return lights_meeting(p.effects, p.num_lights, lights, emit, |c, r| lighting::sphere_intersects_aabb(c, r, &aabb));
     }
     let (i, j, k) = p.grid.unpack(key);
     let frustum = cluster_test::cluster_frustum(&p.grid, bounds, i, j, k);
     if mode == EFFECT_CULL_PLANES {
-        lights_meeting(p.num_lights, lights, emit, |c, r| !cluster_test::sphere_outside_planes(&frustum, c, r))
+        lights_meeting(p.effects, p.num_lights, lights, emit, |c, r| !cluster_test::sphere_outside_planes(&frustum, c, r))
     } else {
-        lights_meeting(p.num_lights, lights, emit, |c, r| cluster_test::sphere_meets_frustum(&frustum, c, r))
+        lights_meeting(p.effects, p.num_lights, lights, emit, |c, r| cluster_test::sphere_meets_frustum(&frustum, c, r))
     }
 }
 

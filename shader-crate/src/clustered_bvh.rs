@@ -3,6 +3,7 @@
 //! unique cluster, [`light_bvh::walk_subgroup`]), which replaces
 //! the naive search of [`crate::clustered`] and writes the same counts and lists (as sets).
 use crate::cluster_bounds::cluster_aabb_of_key;
+use crate::compact_light::light_at;
 use crate::coop::gpu::GpuCoop;
 use crate::coop::{subgroup_item, Coop};
 use crate::layout::*;
@@ -13,18 +14,20 @@ use spirv_std::spirv;
 
 /// Step 1: Morton key (view-space position quantised in the lights' bounds) and index per light.
 #[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
 pub fn light_keys(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &MortonParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] lights: &[PointLight],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] keys: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] order: &mut [u32],
 ) {
     let i = linear_index(wg, nwg, local);
     if i < p.count {
-        keys[i as usize] = p.q30.morton30_of(lights[i as usize].position);
+        keys[i as usize] = p.q30.morton30_of(light_at(lights, light_types, i).position);
         order[i as usize] = i;
     }
 }
@@ -32,18 +35,20 @@ pub fn light_keys(
 /// Step 2a: the lights' spheres in sorted order (`spheres[s]` = light `order[s]`'s), so that the
 /// leaves and the walks read them coalesced, 16 B each, instead of through `order`.
 #[spirv(compute(threads(256)))]
+#[allow(clippy::too_many_arguments)]
 pub fn bvh_spheres(
     #[spirv(workgroup_id)] wg: UVec3,
     #[spirv(num_workgroups)] nwg: UVec3,
     #[spirv(local_invocation_index)] local: u32,
     #[spirv(push_constant)] p: &BvhParams,
+    #[spirv(spec_constant(id = 0, default = 0))] light_types: u32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] lights: &[PointLight],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] order: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] spheres: &mut [LightSphere],
 ) {
     let s = linear_index(wg, nwg, local);
     if s < p.count {
-        spheres[s as usize] = light_bvh::sphere_of(&lights[order[s as usize] as usize]);
+        spheres[s as usize] = light_bvh::sphere_of(&light_at(lights, light_types, order[s as usize]));
     }
 }
 

@@ -54,7 +54,7 @@ specular_entries! {
         shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, p.num_lights, lights, &all_lights, &mut sum);
         shading::shade_directional_lights::<SPECULAR>(&surface, p.effects, p.num_lights, lights, &mut sum);
         // The heatmap shows the lights that touch the pixel (the frame-uniform view: no divergence).
-        let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };
+        let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.effects, p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };
         frame[i as usize] = shading::output_colour(p, bounds, i, &surface, sum, touching);
     }
 }
@@ -90,7 +90,7 @@ specular_entries! {
             shading::shade_lights::<SPECULAR, true, _>(surface, effects, n, lights, &shading::light_range(0, n), &mut sum);
             shading::shade_directional_lights::<SPECULAR>(surface, effects, n, lights, &mut sum);
             let pos = surface.pos;
-            let touching = if view == VIEW_HEATMAP { lights_meeting(n, lights, |_, _| {}, move |c, r| lighting::in_range(c, r, pos)) } else { 0 };
+            let touching = if view == VIEW_HEATMAP { lights_meeting(effects, n, lights, |_, _| {}, move |c, r| lighting::in_range(c, r, pos)) } else { 0 };
             (sum, touching)
         };
         frame[i as usize] = msaa::shade_edge_pixel(p, i, bounds, depth, normals, albedo, materials, shade);

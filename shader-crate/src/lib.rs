@@ -90,6 +90,7 @@ pub mod clustered;
 pub mod clustered_aabb;
 #[cfg(feature = "compute")]
 pub mod clustered_bvh;
+pub mod compact_light;
 pub mod coop;
 pub mod debug_view;
 #[cfg(feature = "compute")]

@@ -41,7 +41,7 @@ fn lights_meeting_emits_the_passing_lights_in_order() {
         let lights: Vec<PointLight> = (0..n).map(|_| PointLight { position: [rng.unit(), 0.0, 0.0], radius: rng.unit(), colour: [1.0; 3], intensity: 1.0 }).collect();
         let expected: Vec<(u32, u32)> = (0..n).filter(|&l| lights[l as usize].position[0] < lights[l as usize].radius).enumerate().map(|(k, l)| (k as u32, l)).collect();
         let mut got = Vec::new();
-        let count = lights_meeting(n, &lights, |k, l| got.push((k, l)), |c, r| c.x < r);
+        let count = lights_meeting(0, n, &lights, |k, l| got.push((k, l)), |c, r| c.x < r);
         assert_eq!(got, expected, "{n} lights");
         assert_eq!(count as usize, expected.len());
     }

@@ -44,6 +44,7 @@
 //! A directional record ([`directional_record`]) is the view-space unit direction *towards* the
 //! light, its intensity, its colour: irradiance `colour · intensity · n·l` everywhere, no range,
 //! so no culling: every shading pass adds them once per pixel ([`crate::shading::shade_directional_lights`]).
+use crate::compact_light::EFFECT_COMPACT_LIGHTS;
 use crate::layout::{FrameParams, PointLight};
 use crate::spot::{cone_meets_sphere, Cone};
 use glam::Vec3;
@@ -77,16 +78,20 @@ const _: () = assert!(LIGHT_TYPES_SPEC_ID == 0);
 ///  bit  6     EFFECT_SPOT
 ///  bit  7     EFFECT_DIRECTIONAL
 ///  bits 8–10  directional count (0 ..= MAX_DIRECTIONAL_LIGHTS)
+///  bit  12    EFFECT_COMPACT_LIGHTS (compact_light: 16-byte point-light records)
 /// ```
-pub const LIGHT_TYPE_MASK: u32 = EFFECT_SPOT | EFFECT_DIRECTIONAL | (7 << DIRECTIONAL_COUNT_SHIFT);
-/// Distinct light-type specializations: spots or not × 0 ..= 4 directional lights.
-pub const LIGHT_TYPE_VARIANTS: usize = 2 * (MAX_DIRECTIONAL_LIGHTS as usize + 1);
+pub const LIGHT_TYPE_MASK: u32 = EFFECT_SPOT | EFFECT_DIRECTIONAL | (7 << DIRECTIONAL_COUNT_SHIFT) | EFFECT_COMPACT_LIGHTS;
+/// Distinct light-type specializations: spots or not × 0 ..= 4 directional lights × full or
+/// compact records ([`crate::compact_light`]; compact records hold point lights only, so one
+/// compact variant is ever created).
+pub const LIGHT_TYPE_VARIANTS: usize = 4 * (MAX_DIRECTIONAL_LIGHTS as usize + 1);
 
 /// Index in `0..LIGHT_TYPE_VARIANTS` of the light-type mix of `effects` (the host's pipeline
-/// cache key): `spot + 2 · directional count`.
+/// cache key): `spot + 2 · directional count + 10 · compact`.
 #[inline]
 pub fn light_type_variant(effects: u32) -> usize {
-    usize::from(effects & EFFECT_SPOT != 0) + 2 * directional_count(effects) as usize
+    let compact = usize::from(effects & EFFECT_COMPACT_LIGHTS != 0);
+    usize::from(effects & EFFECT_SPOT != 0) + 2 * directional_count(effects) as usize + LIGHT_TYPE_VARIANTS / 2 * compact
 }
 
 /// Push constants that carry a [`FrameParams`]: what [`specialise`] rewrites.
@@ -190,6 +195,7 @@ pub fn spot_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u3
     if effects & EFFECT_SPOT == 0 || effects & EFFECT_CULL_SPHERE_ONLY != 0 {
         return true;
     }
+    // Spot scenes hold full records (`compact_light`): the record is the light.
     let light = lights[l as usize];
     cone_may_meet(effects, lights, num_lights, l, &light, c, r)
 }
@@ -257,13 +263,16 @@ mod tests {
         assert_eq!(specialise(&t, 0).mode, 1);
         // Every mix has its own variant.
         let mut seen = [false; LIGHT_TYPE_VARIANTS];
-        for spots in [false, true] {
-            for d in 0..=MAX_DIRECTIONAL_LIGHTS {
-                let v = light_type_variant(light_effects(spots, d));
-                assert!(!seen[v], "variant {v} twice");
-                seen[v] = true;
+        for compact in [0, EFFECT_COMPACT_LIGHTS] {
+            for spots in [false, true] {
+                for d in 0..=MAX_DIRECTIONAL_LIGHTS {
+                    let v = light_type_variant(light_effects(spots, d) | compact);
+                    assert!(!seen[v], "variant {v} twice");
+                    seen[v] = true;
+                }
             }
         }
+        assert!(seen.iter().all(|&s| s), "every variant is some mix");
         assert_eq!(light_type_variant(crate::layout::EFFECT_SPECULAR), 0);
     }
 

@@ -31,6 +31,7 @@
 //! them as a specialization constant (`light_types`, "Specialised pipelines"), so the driver
 //! folds [`shade_lights`]' and [`shade_directional_lights`]' `EFFECT_SPOT` / `EFFECT_DIRECTIONAL`
 //! branches away.
+use crate::compact_light::light_at;
 use crate::layout::*;
 use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SPOT};
 use crate::{lighting, octahedral, reconstruct, spot};
@@ -374,17 +375,15 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, nu
     }
     // A light index past the buffer (none is: lists hold indices of this frame's lights, and an
     // empty buffer has no list entries) reads the last light instead of leaving the buffer: one
-    // minimum instead of a bounds check (`crate::unchecked`).
-    let n = lights.len() as u32;
-    let last = if n > 0 { n - 1 } else { 0 };
+    // minimum instead of a bounds check (`compact_light::light_at`, `crate::unchecked`).
     let mut t = first;
     while t < end {
         let l = list.at(t);
-        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, crate::unchecked::get(lights, l.min(last)));
+        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
         t += 1;
         if t < end {
             let l = list.at(t);
-            *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, crate::unchecked::get(lights, l.min(last)));
+            *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
             t += 1;
         }
     }
@@ -415,7 +414,7 @@ fn shade_next<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num
         return false;
     }
     *pos = next;
-    *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &lights[l as usize]);
+    *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
     true
 }
 

@@ -29,6 +29,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         oit: Default::default(),
         dispatch_times: false,
         msaa: 1,
+        light_record: Default::default(),
     }
 }
 

@@ -38,8 +38,13 @@
 //!    brute force at 16× the pixels (a 4 × 4 grid per pixel: square, so the frame keeps its
 //!    aspect; more than the 8 samples of the finest setting) box-filtered in linear colour
 //!    (`render::msaa::box_filter`), timed by the whole GPU frame (its own Pareto plot).
+//! 8. **light record** — `--light-record` full (32 B per light) and compact (16 B:
+//!    `shaders::compact_light`), with `clustered-bvh`; reference: brute force with full records.
+//!    The compact rows' error is the quantisation of position, radius and colour; their time
+//!    includes the decode at every light read (and the halved light buffer's bandwidth).
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
+use crate::render::light_record::LightRecord;
 use crate::render::transparent::OitVariant;
 use crate::render::{self, Frame, Settings, Technique};
 use crate::scene::flatten::{flatten, scene_input};
@@ -69,10 +74,12 @@ pub enum Knob {
     Tessellation,
     /// 7. MSAA samples per pixel.
     Msaa,
+    /// 8. light record (full or compact).
+    LightRecord,
 }
 
 impl Knob {
-    pub const ALL: [Knob; 7] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation, Knob::Msaa];
+    pub const ALL: [Knob; 8] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation, Knob::Msaa, Knob::LightRecord];
 }
 
 impl std::fmt::Display for Knob {
@@ -178,7 +185,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
 pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
     let mut rows = Vec::new();
-    let bar = indicatif::ProgressBar::new((a.scenes.len() * 24) as u64);
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 27) as u64);
     for name in &a.scenes {
         let scene = super::load_scene(name, a)?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
@@ -316,6 +323,14 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 measure(MSAA_KNOB, format!("{samples} × ({edges:.1} % edge pixels)"), &reference, &f, None);
             }
         }
+        // 8: reference = brute force with full records.
+        if wants(Knob::LightRecord) {
+            let reference = run(&base, 0, &settings(a, Technique::Deferred, a.tile_size, Precision::Oct16))?;
+            for record in [LightRecord::Full, LightRecord::Compact] {
+                let f = run(&base, 0, &Settings { light_record: record, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) })?;
+                measure(LIGHT_RECORD_KNOB, format!("{} ({} B per light)", record.name(), record.bytes_per_light()), &reference, &f, None);
+            }
+        }
         let tess_rows = rows.iter_mut().filter(|r| r.scene == *name && r.knob == TESS_KNOB);
         for (r, e) in tess_rows.zip(tess_errors) {
             r.geometric_error = Some(e);
@@ -406,7 +421,8 @@ pub fn markdown(rows: &[AccuracyRow], device: &str, command: &str, plots: &[Path
 }
 
 /// The knobs timed by compute ms (one plot per scene), and the OIT knob, timed by its passes.
-const COMPUTE_KNOBS: [&str; 4] = ["normal encoding", "culling test", "tile size", "falloff"];
+const COMPUTE_KNOBS: [&str; 5] = ["normal encoding", "culling test", "tile size", "falloff", LIGHT_RECORD_KNOB];
+const LIGHT_RECORD_KNOB: &str = "light record";
 const OIT_KNOB: &str = "transparency (OIT)";
 const TESS_KNOB: &str = "tessellation";
 const MSAA_KNOB: &str = "MSAA";

@@ -286,6 +286,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         oit: Default::default(),
         dispatch_times: false,
         msaa: 1,
+        light_record: Default::default(),
     }
 }
 

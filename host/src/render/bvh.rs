@@ -65,19 +65,21 @@ impl LightBvh {
 
     /// Records the Morton keys ("morton keys"), their sort ("light sort") and the level-by-level
     /// build ("bvh build").
-    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, lights: &Buffer) -> VkResult<()> {
+    /// `effects`: the frame's, whose light-type bits say how `lights` stores them (full or compact
+    /// records).
+    pub fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, lights: &Buffer, effects: u32) -> VkResult<()> {
         let k = &gpu.kernels;
         let n = self.n;
         if n == 0 {
             return Ok(());
         }
-        rec.pass("morton keys", |rec| rec.dispatch_linear(&k.light_keys, &[lights, &self.keys, &self.order], &self.quantizers, n))?;
+        rec.pass("morton keys", |rec| rec.dispatch_linear(k.light_keys.get(effects)?, &[lights, &self.keys, &self.order], &self.quantizers, n))?;
         rec.pass("light sort", |rec| self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS))?;
         rec.pass("bvh build", |rec| {
             let b = self.branching;
             let leaves = level_nodes(n, 0, b);
             let p = BvhParams { count: n, level: 0, nodes: leaves, branching: b };
-            rec.dispatch_linear(&k.bvh_spheres, &[lights, &self.order, &self.spheres], &p, n)?;
+            rec.dispatch_linear(k.bvh_spheres.get(effects)?, &[lights, &self.order, &self.spheres], &p, n)?;
             rec.dispatch_subgroups(&k.bvh_leaves, &[&self.spheres, &self.nodes], &p, leaves)?;
             for level in 1..level_count(n, b) {
                 let nodes = level_nodes(n, level, b);

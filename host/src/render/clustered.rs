@@ -145,7 +145,7 @@ impl LightingTechnique for Clustered {
     /// The light sort + BVH build depend on the lights only: on the async-compute queue they
     /// overlap the G-buffer raster (the assignment waits for them).
     fn record_async(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
-        self.bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, f.lights))
+        self.bvh.as_ref().map_or(Ok(()), |b| b.record(gpu, rec, f.lights, f.params.effects))
     }
 
     fn lights_moved(&mut self, f: &FrameInputs<'_>) {

@@ -40,6 +40,7 @@ pub mod frame_time;
 pub mod gbuffer;
 pub mod legend;
 pub mod light_contract;
+pub mod light_record;
 pub mod light_types;
 pub mod msaa;
 pub mod nurbs;
@@ -195,6 +196,8 @@ pub struct Settings {
     pub dispatch_times: bool,
     /// Samples per pixel of the G-buffer (`--msaa`; 1: no multisampling, nothing of `msaa.rs`).
     pub msaa: u32,
+    /// How the light buffer stores point lights (`--light-record`).
+    pub light_record: light_record::LightRecord,
 }
 
 /// GPU results kept for checks and statistics.

@@ -42,7 +42,7 @@ const FIRST_CAPACITY: u32 = 256;
 
 pub struct RasterTiled {
     tile_depths_pipe: ComputePipeline<FrameParams>,
-    rects_pipe: ComputePipeline<FrameParams>,
+    rects_pipe: LightCompute<FrameParams>,
     append_pipe: LightRaster<FrameParams>,
     shade_pipes: [LightCompute<FrameParams>; 2],
     /// The MSAA edge pass (`--msaa` above 1).
@@ -76,7 +76,7 @@ impl RasterTiled {
         let raster = &gpu.light_graphics;
         Ok(Self {
             tile_depths_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::TILE_DEPTHS)?,
-            rects_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::LIGHT_RECTS)?,
+            rects_pipe: LightTyped::compute(&gpu.light_compute, handles::LIGHT_RECTS),
             append_pipe: LightTyped::raster(raster, handles::APPEND, &[] as &[(TargetFormat, Blend)], DepthTest::Off),
             shade_pipes: handles::SHADE.map(|k| LightTyped::compute(&gpu.light_compute, k)),
             edge_pipes: super::msaa::edge_pipelines(gpu, f.msaa, handles::SHADE_EDGES),
@@ -102,7 +102,7 @@ impl LightingTechnique for RasterTiled {
         let (t, p) = (f.targets, self.params(f));
         let g = &p.grid;
         rec.pass("tile depth bounds", |rec| rec.dispatch(&self.tile_depths_pipe, &[&t.depth_buf, &self.tile_depths, &self.counts], &p, [g.tiles_x, g.tiles_y, 1]))?;
-        rec.pass("light quads", |rec| rec.dispatch_linear(&self.rects_pipe, &[f.lights, &self.rects], &FrameParams { count: p.num_lights, ..p }, p.num_lights))?;
+        rec.pass("light quads", |rec| rec.dispatch_linear(self.rects_pipe.get(p.effects)?, &[f.lights, &self.rects], &FrameParams { count: p.num_lights, ..p }, p.num_lights))?;
         rec.pass("raster assignment", |rec| {
             rec.draws_read_kernel_writes();
             rec.fragments_read_earlier_writes();

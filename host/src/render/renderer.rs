@@ -174,7 +174,7 @@ impl Renderer {
             bail!("--msaa {}: transparent materials are drawn once per pixel over the opaque frame, not per sample: render scenes with transparency at --msaa 1", s.msaa);
         }
         let n = s.width * s.height;
-        let lights_view = lights_to_view(&scene.view, scene.lights)?;
+        let (records, lights_view) = super::light_record::light_buffer(s.light_record, &scene.view, lights_to_view(&scene.view, scene.lights)?, scene.spots, scene.directional)?;
         let positions = scene.view.relative_positions(scene.positions);
         let (geometry, tessellation, indices) = super::nurbs::upload_geometry(gpu, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
@@ -185,7 +185,6 @@ impl Renderer {
         let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code(), gbuffer_samples, s.msaa).context("allocating the G-buffer")?;
         let msaa = super::msaa::Multisampling::new(gpu, gbuffer_samples, n as u64).context("creating the MSAA passes")?;
         let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
-        let records = light_records(&scene.view, &lights_view, scene.spots, scene.directional)?;
         let lights = Buffer::from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
         let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
         let bounds = slice_bounds(&grid);
@@ -196,7 +195,7 @@ impl Renderer {
             count: n,
             num_lights: scene.lights.len() as u32,
             light_capacity: 0,
-            effects: scene.effects | light_types::light_effects(scene.spots, scene.directional)?,
+            effects: scene.effects | light_types::light_effects(scene.spots, scene.directional)? | s.light_record.effects(),
             normal_precision: s.normal_precision.code(),
             view: s.view.code(),
             exposure: s.exposure,
@@ -323,8 +322,7 @@ impl Renderer {
     /// buffer and creates the technique anew; on an error the renderer keeps its lights and
     /// technique.
     pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight], spots: &[Option<light_types::Spot>]) -> Result<()> {
-        let lights_view = lights_to_view(&self.res.view, world_lights)?;
-        let records = light_records(&self.res.view, &lights_view, spots, &self.res.directional)?;
+        let (records, lights_view) = super::light_record::light_buffer(self.res.settings.light_record, &self.res.view, lights_to_view(&self.res.view, world_lights)?, spots, &self.res.directional)?;
         let effects = (self.res.params.effects & !shaders::light_types::EFFECT_SPOT) | light_types::light_effects(spots, &self.res.directional)?;
         if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;

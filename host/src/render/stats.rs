@@ -38,6 +38,9 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "tile_size": s.tile_size,
         "slices": frame.grid.num_slices,
         "lights": lights,
+        // How the light buffer stores them (`--light-record`) and what it takes per light.
+        "light_record": { "record": s.light_record.name(), "record_bytes": s.light_record.bytes_per_light(),
+                          "light_buffer_bytes": frame.buffers.iter().find(|b| b.0 == "lights").map(|b| b.1) },
         // Each NURBS patch's tessellation level in the last frame (adaptive levels as the GPU
         // chose them; empty without patches).
         "tess_levels": frame.tess_levels,
@@ -55,7 +58,9 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
             "frame": g.ms, "frame_min": g.min_ms, "frame_max": g.max_ms, "frame_without_raster": g.non_raster_ms,
             "main_queue": g.main_ms, "async_queue": g.async_ms, "overlap": g.overlap_ms,
             "frame_spans_queues": g.across_queues, "async_compute": frame.overlapped },
-        "bytes": { "buffers": buffers, "total": frame.buffers.iter().map(|b| b.1).sum::<u64>() },
+        "bytes": { "buffers": buffers, "total": frame.buffers.iter().map(|b| b.1).sum::<u64>(),
+                   // Every buffer's bytes over the light count: per light where the lights dominate.
+                   "per_light": (lights > 0).then(|| frame.buffers.iter().map(|b| b.1).sum::<u64>() as f64 / lights as f64) },
         "clusters": { "unique": frame.unique_clusters, "pages": frame.pages, "light_references": frame.light_refs, "regrowths": frame.regrowths },
         "lights_per_cluster": { "mean": lists.mean_per_cluster, "max": lists.max_per_cluster },
         "lights_per_pixel": { "mean": lists.mean_per_pixel, "max": lists.max_per_pixel },

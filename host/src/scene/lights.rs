@@ -13,8 +13,10 @@ use anyhow::{bail, ensure, Result};
 use glam::Vec3;
 use shaders::layout::PointLight;
 
-/// Most lights a generator makes: 2²⁶ lights are 2 GiB of `PointLight`s.
-pub const MAX_LIGHTS: usize = 1 << 26;
+/// Most lights a generator makes, a scene holds and the renderer takes: 2^27 − 4 lights are
+/// 2 GiB of 16-byte compact records (`shaders::compact_light`; full 32-byte records hold half,
+/// `preflight::max_lights`).
+pub const MAX_LIGHTS: usize = shaders::compact_light::MAX_COMPACT_LIGHTS as usize;
 /// Intensity of generated lights unless told otherwise.
 pub const DEFAULT_INTENSITY: f32 = 0.15;
 /// Most centres [`hotspots`] takes (more would only cost memory: each centre is one cluster).
@@ -108,7 +110,7 @@ pub fn default_radius(bounds: (Vec3, Vec3), n: usize) -> f32 {
 
 fn check(n: usize, bounds: (Vec3, Vec3)) -> Result<()> {
     if n > MAX_LIGHTS {
-        bail!("{n} lights requested, more than the {MAX_LIGHTS} supported (2 GiB of lights)");
+        bail!("{n} lights requested, more than the {MAX_LIGHTS} supported (2 GiB of compact records)");
     }
     ensure!(bounds.0.is_finite() && bounds.1.is_finite() && (bounds.1 - bounds.0).is_finite(), "light bounds {bounds:?} are not finite in 32-bit floats");
     ensure!(bounds.0.cmple(bounds.1).all(), "light bounds {bounds:?} have a minimum above the maximum");

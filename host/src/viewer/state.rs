@@ -180,7 +180,7 @@ impl Viewer {
     fn set_technique(&mut self, gpu: &Gpu, t: Technique) -> Result<()> {
         let info = &gpu.ctx.info;
         preflight::check_tile_for(t, self.settings.tile_size)?;
-        preflight::check_lights(info, t, self.settings.tile_size, self.base_lights.len() as u64, &format!("{} lights", self.base_lights.len()))?;
+        preflight::check_lights(info, t, self.settings.light_record, self.settings.tile_size, self.base_lights.len() as u64, &format!("{} lights", self.base_lights.len()))?;
         let s = Settings { technique: t, ..self.settings.clone() };
         if let Some(r) = self.renderer.as_mut() {
             r.set_settings(gpu, &s)?;
@@ -211,7 +211,7 @@ impl Viewer {
             ),
             None => vec![],
         };
-        preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.tile_size, n as u64, &what)?;
+        preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.light_record, self.settings.tile_size, n as u64, &what)?;
         let base = lights::uniform(&self.scene, n, self.seed).with_context(|| format!("generating {what}"))?;
         let animated = lights::animate(&base, self.time);
         if let Some(r) = self.renderer.as_mut() {
