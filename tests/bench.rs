@@ -112,8 +112,8 @@ fn bench_bad_input_is_a_one_line_error() {
 /// The accuracy study on a tiny frame with 10k lights (enough for llvmpipe's loop limiter to
 /// bite if a test looped per light): the reference setting reproduces the reference, tile
 /// sizes only move time (lists are conservative), a smaller ε is never less accurate, 4× MSAA
-/// comes closer to 16× supersampling than one sample, and the Pareto plots and markdown are
-/// written.
+/// comes closer to 16× supersampling than one sample, compact light records differ from full
+/// ones by at most 1/255 but differ, and the Pareto plots and markdown are written.
 #[test]
 fn tiny_accuracy_study() {
     let dir = TempDir::new("accuracy");
@@ -122,7 +122,7 @@ fn tiny_accuracy_study() {
     assert!(run.ok, "study failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("accuracy.csv"));
     let msaa: Vec<_> = csv.rows().filter(|r| r.get("knob") == "MSAA").collect();
-    assert_eq!(csv.rows.len(), 16 + msaa.len(), "{:?}", csv.rows);
+    assert_eq!(csv.rows.len(), 18 + msaa.len(), "{:?}", csv.rows);
     // MSAA: one sample and four at least (every device has 4); more samples come closer to the
     // 16× supersampled reference, so the knob reaches the frame.
     let msaa_psnr = |prefix: &str| msaa.iter().find(|r| r.get("setting").starts_with(prefix)).unwrap_or_else(|| panic!("no MSAA row {prefix:?}")).num("psnr_db");
@@ -162,6 +162,10 @@ fn tiny_accuracy_study() {
     assert!(per_cluster("exact sphere–frustum") <= per_cluster("sphere–frustum planes"), "the exact test keeps no more lights than the planes");
     let (e2, e3, e4) = (psnr("inverse square cut at ε = 1e-2"), psnr("inverse square cut at ε = 1e-3"), psnr("inverse square cut at ε = 1e-4"));
     assert!(e2 <= e3 && e3 <= e4, "a smaller cut threshold is never less accurate: {e2} {e3} {e4}");
+    // Light records: full records are the reference's; compact ones move the image (the knob
+    // reaches the kernels) by no more than their quantisation, 1/255 here.
+    assert_eq!(max_abs("full (32 B"), 0.0, "full records reproduce the reference");
+    assert!(max_abs("compact (16 B") > 0.0 && max_abs("compact (16 B") <= 1.0, "compact records: {}/255", max_abs("compact (16 B"));
     let md = std::fs::read_to_string(dir.join("results.md")).expect("results.md");
     assert!(md.contains("| normal encoding | oct 2×8 |") && md.contains("pareto-city.svg"), "{md}");
     assert!(std::fs::read_to_string(dir.join("pareto-city.svg")).expect("pareto plot").starts_with("<svg"));

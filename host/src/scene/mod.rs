@@ -36,6 +36,7 @@ pub mod lights;
 pub mod nurbs;
 pub mod obj;
 pub mod procedural;
+pub mod raycast;
 pub mod text;
 pub mod wavefront;
 #[cfg(test)]
