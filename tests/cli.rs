@@ -292,3 +292,27 @@ fn render_bad_input_is_a_one_line_error_with_status_2() {
         refused(&args, &[], BAD_INPUT, &needles);
     }
 }
+
+/// Compact light records report how far they moved the lights (`--stats`
+/// `light_record.max_position_error`), and warn in one line where that is more than 1 % of the
+/// smallest radius: here one light far outside the city stretches the position grid.
+#[test]
+fn compact_records_report_and_warn_how_far_lights_moved() {
+    let dir = TempDir::new("cli-compact");
+    let scene = dir.write("far.toml", "geometry = \"city\"\n[lights]\ncount = 100\ndistribution = \"uniform\"\n[[light]]\nposition = [1e7, 1e7, 1e7]\nradius = 1\n");
+    let json = dir.join("s.json");
+    let error_of = |record: &str| {
+        let (ok, _, err) = manylights(&[
+            "render", "--scene", scene.to_str().unwrap(), "--light-record", record, "--width", "64", "--height", "36", "--frames", "1",
+            "--stats", json.to_str().unwrap(), "--out", dir.join("o.png").to_str().unwrap(),
+        ]);
+        assert!(ok, "{record}: render failed:\n{err}");
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (stats["light_record"]["max_position_error"].as_f64().unwrap(), err)
+    };
+    let (full, err) = error_of("full");
+    assert!(full == 0.0 && !err.contains("warning: compact"), "full records: {full}\n{err}");
+    let (compact, err) = error_of("compact");
+    let warning: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: compact light records move lights by up to")).collect();
+    assert!(compact > 0.5 && warning.len() == 1, "compact records moved lights by {compact}:\n{err}");
+}

@@ -63,6 +63,7 @@ fn the_light_record_reaches_every_kernel() {
         let (fl, cl) = (&full.readback.as_ref().unwrap().lights_view, &compact.readback.as_ref().unwrap().lights_view);
         let moved = fl.iter().zip(cl).map(|(a, b)| (glam::Vec3::from(a.position) - glam::Vec3::from(b.position)).length()).fold(0.0f32, f32::max);
         assert!(moved > 0.002 * diag && moved < 0.04 * diag, "{t:?}: decoded lights moved by up to {moved} (diagonal {diag})");
+        assert_eq!((full.light_moved, compact.light_moved), (0.0, moved), "{t:?}: the frame reports how far the lights moved");
         let changed = full.pixels.iter().zip(&compact.pixels).filter(|(a, b)| a != b).count();
         assert!(changed > (W * H / 20) as usize, "{t:?}: full and compact records differ in only {changed} pixels");
     }

@@ -231,6 +231,12 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let patches = if scene.nurbs.is_empty() { String::new() } else { format!(", {} NURBS patches", scene.nurbs.len()) };
     eprintln!("rendering {} ({} triangles{patches}, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;
+    // Compact records quantise positions in the lights' box: say so where that moves a light by
+    // more than 1 % of the smallest radius (lights spread far beyond the scene).
+    let smallest = scene.lights.iter().map(|l| l.radius).fold(f32::INFINITY, f32::min);
+    if frame.light_moved > 0.01 * smallest {
+        eprintln!("warning: compact light records move lights by up to {:.3e} (the smallest light radius is {smallest:.3e}): the lights span a large box; --light-record full keeps them exact", frame.light_moved);
+    }
     if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.frame.width, a.frame.height, render::HEAT_MAX) {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);
     }

@@ -60,10 +60,11 @@ impl LightRecord {
 }
 
 /// The light buffer in `record`s (`light_types::light_records` for full records: point lights,
-/// cone and directional sections), and the point lights as the kernels will see them.
-pub fn light_buffer(record: LightRecord, view: &ViewTransform, lights_view: Vec<PointLight>, spots: &[Option<Spot>], directional: &[Directional]) -> Result<(Vec<PointLight>, Vec<PointLight>)> {
+/// cone and directional sections), the point lights as the kernels will see them, and the
+/// farthest any of them moved in the records (view-space distance; 0 for full records).
+pub fn light_buffer(record: LightRecord, view: &ViewTransform, lights_view: Vec<PointLight>, spots: &[Option<Spot>], directional: &[Directional]) -> Result<(Vec<PointLight>, Vec<PointLight>, f32)> {
     match record {
-        LightRecord::Full => Ok((light_records(view, &lights_view, spots, directional)?, lights_view)),
+        LightRecord::Full => Ok((light_records(view, &lights_view, spots, directional)?, lights_view, 0.0)),
         LightRecord::Compact => {
             if spots.iter().any(Option::is_some) || !directional.is_empty() {
                 bail!("--light-record compact holds point lights only: this scene has spot or directional lights (use --light-record full)");
@@ -74,8 +75,9 @@ pub fn light_buffer(record: LightRecord, view: &ViewTransform, lights_view: Vec<
             let frame = compact_light::frame_of(&lights_view);
             let packed = compact_light::pack(&frame, &lights_view);
             debug_assert_eq!(packed.len(), records_for(lights_view.len() as u32) as usize);
-            let seen = (0..lights_view.len() as u32).map(|l| compact_light::compact_at(&packed, l)).collect();
-            Ok((packed, seen))
+            let seen: Vec<PointLight> = (0..lights_view.len() as u32).map(|l| compact_light::compact_at(&packed, l)).collect();
+            let moved = lights_view.iter().zip(&seen).map(|(a, b)| (glam::Vec3::from(a.position) - glam::Vec3::from(b.position)).length()).fold(0.0, f32::max);
+            Ok((packed, seen, moved))
         }
     }
 }
@@ -102,11 +104,11 @@ mod tests {
         assert!(e.starts_with("--light-record compact holds point lights only") && !e.contains('\n'), "{e}");
         let sun = Directional { direction: glam::Vec3::NEG_Y, colour: [1.0; 3], intensity: 1.0 };
         assert!(light_buffer(LightRecord::Compact, &view, vec![l], &[], &[sun]).is_err());
-        let (records, seen) = light_buffer(LightRecord::Compact, &view, vec![l, l], &[None, None], &[]).unwrap();
-        assert_eq!(records.len(), 2);
+        let (records, seen, moved) = light_buffer(LightRecord::Compact, &view, vec![l, l], &[None, None], &[]).unwrap();
+        assert_eq!((records.len(), moved), (2, 0.0), "one position is the grid's origin");
         assert_eq!(seen, vec![compact_light::compact_at(&records, 0); 2]);
         assert_eq!(seen[0].colour, [1.5, 0.75, 3.0]);
-        let (full, seen) = light_buffer(LightRecord::Full, &view, vec![l], &[], &[]).unwrap();
-        assert_eq!((full, seen), (vec![l], vec![l]));
+        let (full, seen, moved) = light_buffer(LightRecord::Full, &view, vec![l], &[], &[]).unwrap();
+        assert_eq!((full, seen, moved), (vec![l], vec![l], 0.0));
     }
 }

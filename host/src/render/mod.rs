@@ -263,6 +263,9 @@ pub struct Frame {
     pub edge_pixels: u32,
     /// Bytes per sample of the frame's multisampled targets and buffers (`--stats`).
     pub bytes_per_sample: u64,
+    /// The farthest a light moved in the light buffer's records (view space; 0 for full records,
+    /// at most half a grid step's diagonal for compact ones: `light_record::light_buffer`).
+    pub light_moved: f32,
 }
 
 impl Frame {

@@ -46,6 +46,8 @@ struct Resources {
     msaa: Option<super::msaa::Multisampling>,
     lights: Buffer,
     lights_view: Vec<PointLight>,
+    /// The farthest a light moved in the light buffer's records (`light_record::light_buffer`).
+    light_moved: f32,
     /// World-space cones and directional lights: re-transformed with the lights each frame.
     spots: Vec<Option<light_types::Spot>>,
     directional: Vec<light_types::Directional>,
@@ -174,7 +176,7 @@ impl Renderer {
             bail!("--msaa {}: transparent materials are drawn once per pixel over the opaque frame, not per sample: render scenes with transparency at --msaa 1", s.msaa);
         }
         let n = s.width * s.height;
-        let (records, lights_view) = super::light_record::light_buffer(s.light_record, &scene.view, lights_to_view(&scene.view, scene.lights)?, scene.spots, scene.directional)?;
+        let (records, lights_view, light_moved) = super::light_record::light_buffer(s.light_record, &scene.view, lights_to_view(&scene.view, scene.lights)?, scene.spots, scene.directional)?;
         let positions = scene.view.relative_positions(scene.positions);
         let (geometry, tessellation, indices) = super::nurbs::upload_geometry(gpu, scene, &positions, s).context("uploading geometry")?;
         let aspect = s.width as f32 / s.height as f32;
@@ -217,6 +219,7 @@ impl Renderer {
             msaa,
             lights,
             lights_view,
+            light_moved,
             spots: scene.spots.to_vec(),
             directional: scene.directional.to_vec(),
             materials_cpu: scene.materials.clone(),
@@ -322,11 +325,12 @@ impl Renderer {
     /// buffer and creates the technique anew; on an error the renderer keeps its lights and
     /// technique.
     pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight], spots: &[Option<light_types::Spot>]) -> Result<()> {
-        let (records, lights_view) = super::light_record::light_buffer(self.res.settings.light_record, &self.res.view, lights_to_view(&self.res.view, world_lights)?, spots, &self.res.directional)?;
+        let (records, lights_view, light_moved) = super::light_record::light_buffer(self.res.settings.light_record, &self.res.view, lights_to_view(&self.res.view, world_lights)?, spots, &self.res.directional)?;
         let effects = (self.res.params.effects & !shaders::light_types::EFFECT_SPOT) | light_types::light_effects(spots, &self.res.directional)?;
         if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;
             self.res.lights_view = lights_view;
+            self.res.light_moved = light_moved;
             self.res.spots.clear();
             self.res.spots.extend_from_slice(spots);
             self.tech.lights_moved(&self.res.inputs());
@@ -339,9 +343,11 @@ impl Renderer {
         let old_count = std::mem::replace(&mut self.res.params.num_lights, world_lights.len() as u32);
         let old_effects = std::mem::replace(&mut self.res.params.effects, effects);
         let old_spots = std::mem::replace(&mut self.res.spots, spots.to_vec());
+        let old_moved = std::mem::replace(&mut self.res.light_moved, light_moved);
         if let Err(e) = self.replace_technique(gpu) {
             self.res.lights = old_lights;
             self.res.lights_view = old_view;
+            self.res.light_moved = old_moved;
             self.res.params.num_lights = old_count;
             self.res.params.effects = old_effects;
             self.res.spots = old_spots;
@@ -473,6 +479,7 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
             None => Vec::new(),
         },
         samples: res.grid.samples,
+        light_moved: res.light_moved,
         bytes_per_sample: r.msaa_bytes_per_sample.unwrap_or_else(|| super::msaa::bytes_per_sample(res.settings.normal_precision)),
         edge_pixels: match (&mut res.msaa, r.msaa_edge_pixels) {
             (_, Some(n)) => n,

@@ -38,9 +38,11 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         "tile_size": s.tile_size,
         "slices": frame.grid.num_slices,
         "lights": lights,
-        // How the light buffer stores them (`--light-record`) and what it takes per light.
+        // How the light buffer stores them (`--light-record`), what it takes per light, and the
+        // farthest a light moved in its record (view-space units).
         "light_record": { "record": s.light_record.name(), "record_bytes": s.light_record.bytes_per_light(),
-                          "light_buffer_bytes": frame.buffers.iter().find(|b| b.0 == "lights").map(|b| b.1) },
+                          "light_buffer_bytes": frame.buffers.iter().find(|b| b.0 == "lights").map(|b| b.1),
+                          "max_position_error": frame.light_moved },
         // Each NURBS patch's tessellation level in the last frame (adaptive levels as the GPU
         // chose them; empty without patches).
         "tess_levels": frame.tess_levels,
