@@ -206,7 +206,7 @@ pub fn pack(frame: &Frame, lights: &[PointLight]) -> Vec<PointLight> {
     out
 }
 
-/// The frame of `lights`' positions (their box), `None` for no lights.
+/// The frame of `lights`' positions (their box; a point at the origin for no lights).
 #[cfg(not(target_arch = "spirv"))]
 pub fn frame_of(lights: &[PointLight]) -> Frame {
     let mut lo = Vec3::splat(f32::INFINITY);
@@ -223,11 +223,11 @@ pub fn frame_of(lights: &[PointLight]) -> Frame {
     }
 }
 
-/// What the kernels see of `lights` in compact records: each light decoded (CPU references).
+/// What the kernels see of the `n` lights of a compact buffer: each light decoded (what the
+/// host keeps for its CPU references and statistics).
 #[cfg(not(target_arch = "spirv"))]
-pub fn as_decoded(lights: &[PointLight]) -> Vec<PointLight> {
-    let packed = pack(&frame_of(lights), lights);
-    (0..lights.len() as u32).map(|l| compact_at(&packed, l)).collect()
+pub fn decoded(packed: &[PointLight], n: u32) -> Vec<PointLight> {
+    (0..n).map(|l| compact_at(packed, l)).collect()
 }
 
 #[cfg(test)]

@@ -114,7 +114,7 @@ fn light_at_follows_the_effect_bit() {
         assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, l), compact_at(&packed, l));
     }
     assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, 99), compact_at(&packed, 4 | 1));
-    assert_eq!(as_decoded(&lights), (0..5).map(|l| compact_at(&packed, l)).collect::<Vec<_>>());
+    assert_eq!(decoded(&packed, 5), (0..5).map(|l| compact_at(&packed, l)).collect::<Vec<_>>());
 }
 
 #[test]

@@ -75,7 +75,7 @@ pub fn light_buffer(record: LightRecord, view: &ViewTransform, lights_view: Vec<
             let frame = compact_light::frame_of(&lights_view);
             let packed = compact_light::pack(&frame, &lights_view);
             debug_assert_eq!(packed.len(), records_for(lights_view.len() as u32) as usize);
-            let seen: Vec<PointLight> = (0..lights_view.len() as u32).map(|l| compact_light::compact_at(&packed, l)).collect();
+            let seen = compact_light::decoded(&packed, lights_view.len() as u32);
             let moved = lights_view.iter().zip(&seen).map(|(a, b)| (glam::Vec3::from(a.position) - glam::Vec3::from(b.position)).length()).fold(0.0, f32::max);
             Ok((packed, seen, moved))
         }

@@ -20,7 +20,8 @@
 //! surface ignored at grazing angles offset the start point along its normal (a documented bias,
 //! like any shadow map's): this module adds none.
 //!
-//! Memory: 72 B per triangle (three 64-bit vertices) and 56 B per node.
+//! Memory: 72 B per triangle (three 64-bit vertices) and 56 B per node (two 64-bit corners, two
+//! indices).
 use glam::DVec3;
 
 /// Most triangles in a leaf.
@@ -28,15 +29,18 @@ pub const LEAF_TRIANGLES: usize = 4;
 /// Segment parameters within this of either end are not hits (`t` is relative to the length).
 pub const EPSILON_T: f64 = 1e-9;
 
+/// Deepest walk: a median split halves the triangles at each level, so a tree of fewer than
+/// 2^62 triangles is shallower; the walk's stack holds at most one node per level plus one.
+const MAX_DEPTH: usize = 64;
+
 #[derive(Clone, Copy, Debug)]
 struct Node {
     lo: DVec3,
     hi: DVec3,
-    /// Leaf: `first..first + count` of the triangles; inner: `first` = left child, the right
-    /// child follows the left's subtree (`count` = 0 marks an inner node, `right` its index).
+    /// Leaf (`count` > 0): the triangles `first..first + count`. Inner (`count` = 0): the right
+    /// child's index; the left child is the next node (built right after its parent).
     first: u32,
     count: u32,
-    right: u32,
 }
 
 /// Triangles that block segments, in a hierarchy.
@@ -81,8 +85,10 @@ impl Occluders {
         }
         let d = b - a;
         let inv = DVec3::ONE / d;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
+        let (mut stack, mut top) = ([0u32; MAX_DEPTH], 1);
+        while top > 0 {
+            top -= 1;
+            let i = stack[top];
             let node = &self.nodes[i as usize];
             if !segment_meets_box(a, inv, node.lo, node.hi) {
                 continue;
@@ -93,8 +99,9 @@ impl Occluders {
                     return true;
                 }
             } else {
-                stack.push(node.right);
-                stack.push(node.first);
+                stack[top] = node.first;
+                stack[top + 1] = i + 1;
+                top += 2;
             }
         }
         false
@@ -107,27 +114,29 @@ impl Occluders {
     }
 }
 
-fn bounds(tris: &[[DVec3; 3]]) -> (DVec3, DVec3) {
-    tris.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+/// The box of `points` (min, max).
+fn box_of(points: impl Iterator<Item = DVec3>) -> (DVec3, DVec3) {
+    points.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
 }
 
 /// Builds the subtree of `tris[first..first + count]`, returns its node index.
 fn build(tris: &mut [[DVec3; 3]], nodes: &mut Vec<Node>, first: usize, count: usize) -> u32 {
-    let (lo, hi) = bounds(&tris[first..first + count]);
+    let (lo, hi) = box_of(tris[first..first + count].iter().flatten().copied());
     let index = nodes.len() as u32;
-    nodes.push(Node { lo, hi, first: first as u32, count: count as u32, right: 0 });
+    nodes.push(Node { lo, hi, first: first as u32, count: count as u32 });
     if count <= LEAF_TRIANGLES {
         return index;
     }
     let centroid = |t: &[DVec3; 3]| (t[0] + t[1] + t[2]) / 3.0;
-    let (clo, chi) = tris[first..first + count].iter().map(centroid).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let (clo, chi) = box_of(tris[first..first + count].iter().map(centroid));
     let extent = chi - clo;
     let axis = if extent.x >= extent.y && extent.x >= extent.z { 0 } else if extent.y >= extent.z { 1 } else { 2 };
     let half = count / 2;
     tris[first..first + count].select_nth_unstable_by(half, |p, q| centroid(p)[axis].total_cmp(&centroid(q)[axis]));
     let left = build(tris, nodes, first, half);
+    debug_assert_eq!(left, index + 1, "the left child follows its parent");
     let right = build(tris, nodes, first + half, count - half);
-    nodes[index as usize] = Node { lo, hi, first: left, count: 0, right };
+    nodes[index as usize] = Node { lo, hi, first: right, count: 0 };
     index
 }
 
