@@ -3,10 +3,9 @@
 //! - **clustered**: 30-bit Morton codes of lights gathered around a few hotspots (long runs of
 //!   nearby and equal keys, as a scene's light clusters give).
 //!
-//! Per distribution and size: the GPU radix sort (`host::render::sort`, the device's variant;
-//! where the device runs the chained scan, also its reduce-then-scan variant) and the bitonic
-//! sort (`host::render::bitonic`), timed with GPU timestamps (`iter_custom`: batches of sorts
-//! recorded back to back, each of a GPU copy of the unsorted pairs made outside the timed pass,
+//! Per distribution and size: the GPU radix sort (`host::render::sort`: both cross-tile variants
+//! where the device runs both, else its own) and the bitonic sort (`host::render::bitonic`),
+//! timed with GPU timestamps (`iter_custom`: batches of sorts recorded back to back, each of a GPU copy of the unsorted pairs made outside the timed pass,
 //! so the GPU stays busy as in a frame — sorts separated by host uploads let its clocks drop and
 //! measured several times slower than the same sort inside a frame); Rust's `sort_unstable_by_key` on the
 //! CPU as an anchor; and the CPU versions of the kernels — the same functions in the lock-step
@@ -25,7 +24,9 @@
 //! `MANYLIGHTS_SORT_SIZES` (default 1k,64k,1M,4M,16M; sizes whose buffers exceed the device's
 //! `maxStorageBufferRange` are skipped with a note); emulated sizes `MANYLIGHTS_SORT_CPU_SIZES`
 //! (default 1k,64k,1M; a few µs per key) at subgroup width `MANYLIGHTS_SORT_CPU_WIDTH` (default
-//! 8); `MANYLIGHTS_SORT_KEY_BITS` (default 30: every GPU sort orders the keys' low bits only,
+//! 8); `MANYLIGHTS_SORT_PARTS` (set: below each radix row, the GPU ms of each of its kernels,
+//! fills and copies); `MANYLIGHTS_SORT_KEY_BITS` (default 30: every GPU sort orders the keys' low
+//! bits only,
 //! 8 per radix pass — 8, 16, 24 give one to three passes). lavapipe's timestamps do not bracket
 //! its work: quote GPU numbers from a real GPU only.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -98,18 +99,18 @@ fn gpu_sizes(gpu: &Gpu) -> Vec<usize> {
         .collect()
 }
 
-/// The sorts timed on the GPU: the device's radix variant, reduce-then-scan too where that is the
-/// chained scan, the bitonic sort (with each keep of `MANYLIGHTS_BITONIC_KEEPS` too) and the
+/// The sorts timed on the GPU: the device's radix variant for `n`, the other one too where the
+/// device runs both, the bitonic sort (with each keep of `MANYLIGHTS_BITONIC_KEEPS` too) and the
 /// light pipeline's default, which picks one of them by size (`SortKind::Auto`).
 fn gpu_sorters(gpu: &Gpu, n: u32) -> Vec<(String, LightSorter)> {
     let radix = RadixSort::new(gpu, n).expect("radix sort buffers");
     let name = |c: CrossTile| format!("gpu radix {} (timestamps)", if c == CrossTile::Chained { "chained" } else { "reduce-then-scan" });
     let cross = radix.cross_tile();
     let mut v = vec![(name(cross), LightSorter::Radix(Box::new(radix)))];
-    // The other variant where the device's choice for `n` is the chained scan.
-    if cross == CrossTile::Chained {
-        let other = RadixSort::with_cross_tile(gpu, n, CrossTile::ReduceThenScan).expect("radix sort buffers");
-        v.push((name(CrossTile::ReduceThenScan), LightSorter::Radix(Box::new(other))));
+    // The other variant where the device can run both.
+    let other = if cross == CrossTile::Chained { CrossTile::ReduceThenScan } else { CrossTile::Chained };
+    if let Ok(other) = RadixSort::with_cross_tile(gpu, n, other) {
+        v.push((name(other.cross_tile()), LightSorter::Radix(Box::new(other))));
     }
     v.push(("gpu bitonic (timestamps)".into(), LightSorter::new(gpu, SortKind::Bitonic, n).expect("bitonic sort buffers")));
     v.push(("gpu auto (timestamps)".into(), LightSorter::new(gpu, SortKind::Auto, n).expect("light sort buffers")));
@@ -174,7 +175,34 @@ impl Inputs {
         })
         .expect("sort");
         let wall_ms = wall.elapsed().as_secs_f64() * 1e3 / BATCH as f64;
-        (prof.results().expect("timestamps").iter().map(|t| t.ms).collect(), wall_ms)
+        (prof.results().expect("timestamps").iter().filter(|t| !t.part).map(|t| t.ms).collect(), wall_ms)
+    }
+
+    /// GPU milliseconds per sort of each kind of command (every dispatch of a kernel, every fill,
+    /// every copy inside the sort; `MANYLIGHTS_SORT_PARTS`): summed over a batch of [`BATCH`]
+    /// sorts recorded with a timestamp around each command, divided by [`BATCH`].
+    fn parts(&self, gpu: &Gpu, sorter: &LightSorter) -> Vec<(String, f64)> {
+        let mut prof = Profiler::new(&gpu.ctx, BATCH * 24).expect("profiler").with_parts(true);
+        let bytes = 4 * self.n as u64;
+        gpu.run(Some(&mut prof), |rec| {
+            for _ in 0..BATCH {
+                rec.copy(&self.src_keys, &self.keys, bytes)?;
+                rec.copy(&self.src_values, &self.values, bytes)?;
+                rec.pass("sort", |rec| sorter.record(gpu, rec, &self.keys, &self.values, self.n, self.key_bits))?;
+            }
+            Ok(())
+        })
+        .expect("sort");
+        let mut by_kind: Vec<(String, f64)> = Vec::new();
+        for t in prof.results().expect("timestamps").into_iter().filter(|t| t.part) {
+            // "sort · radix_chained #3" → "radix_chained"
+            let kind = t.name.trim_start_matches("sort · ").split(" #").next().unwrap_or_default().to_owned();
+            match by_kind.iter_mut().find(|e| e.0 == kind) {
+                Some(e) => e.1 += t.ms / BATCH as f64,
+                None => by_kind.push((kind, t.ms / BATCH as f64)),
+            }
+        }
+        by_kind
     }
 }
 
@@ -269,6 +297,11 @@ fn radix_summary(_: &mut Criterion) {
             };
             let name = name.trim_start_matches("gpu ").trim_end_matches(" (timestamps)");
             println!("| {n} | {name} | {gpu_ms:.3} | {:.1} | {wall_ms:.2} | {cub_col} | {ratio} |", n as f64 / gpu_ms * 1e-3);
+            if std::env::var_os("MANYLIGHTS_SORT_PARTS").is_some() && !matches!(sorter, LightSorter::Bitonic(_)) {
+                let parts = inputs.parts(&gpu, &sorter);
+                let line: Vec<String> = parts.iter().map(|(p, ms)| format!("{} {ms:.3}", p.trim_start_matches("sort · "))).collect();
+                println!("|  | ↳ parts (GPU ms) | {} |  |  |  |  |", line.join(", "));
+            }
         }
     }
 }
