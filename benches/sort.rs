@@ -14,9 +14,9 @@
 //! CPU sort. Criterion reports each as keys/s (`thrpt`).
 //!
 //! First a summary table of every GPU sort on uniform keys: median GPU ms of 3 batches, keys/s and
-//! wall-clock ms per sort, and beside the radix and `auto` rows CUB's key–value sort (CuPy
-//! `argsort` + gather, `benches/cub_sort.py`) where the device is an NVIDIA GPU with CuPy, with
-//! the ratio to CUB.
+//! wall-clock ms per sort (each sort's output checked: ordered keys, each with its input index),
+//! and beside the radix and `auto` rows CUB's key–value sort (CuPy `argsort` + gather,
+//! `benches/cub_sort.py`) where the device is an NVIDIA GPU with CuPy, with the ratio to CUB.
 //!
 //! `cargo bench -p host --bench sort`. Environment: `MANYLIGHTS_DEVICE`;
 //! `MANYLIGHTS_BITONIC_KEEPS` (e.g. `1,2,4,8`: the bitonic sort again with each splitter keep,
@@ -178,6 +178,23 @@ impl Inputs {
         (prof.results().expect("timestamps").iter().filter(|t| !t.part).map(|t| t.ms).collect(), wall_ms)
     }
 
+    /// Panics unless the last sort left `keys` ordered by their low [`key_bits`] bits with each
+    /// value the input index of its key (a permutation): no time is reported for a wrong sort.
+    fn check(&mut self, unsorted: &[u32], what: &str) {
+        let n = self.n as usize;
+        let (keys, values): (Vec<u32>, Vec<u32>) = (self.keys.read(n).expect("keys"), self.values.read(n).expect("values"));
+        let mask = if self.key_bits >= 32 { u32::MAX } else { (1u32 << self.key_bits) - 1 };
+        if let Some(i) = (1..n).find(|&i| keys[i - 1] & mask > keys[i] & mask) {
+            panic!("{what}, {n} pairs: keys out of order at {i}");
+        }
+        let mut seen = vec![false; n];
+        for (i, (&k, &v)) in keys.iter().zip(&values).enumerate() {
+            let v = v as usize;
+            assert!(v < n && !seen[v] && unsorted[v] == k, "{what}, {n} pairs: pair {i} ({k}, {v}) is not an input pair");
+            seen[v] = true;
+        }
+    }
+
     /// GPU milliseconds per sort of each kind of command (every dispatch of a kernel, every fill,
     /// every copy inside the sort; `MANYLIGHTS_SORT_PARTS`): summed over a batch of [`BATCH`]
     /// sorts recorded with a timestamp around each command, divided by [`BATCH`].
@@ -285,10 +302,11 @@ fn radix_summary(_: &mut Criterion) {
     for n in sizes {
         let k = uniform(n);
         let values: Vec<u32> = (0..n as u32).collect();
-        let inputs = Inputs::new(&gpu, &k, &values);
+        let mut inputs = Inputs::new(&gpu, &k, &values);
         let cub_n = cub.as_ref().and_then(|c| c.iter().find(|e| e.0 == n).map(|e| e.1));
         for (name, sorter) in gpu_sorters(&gpu, n as u32) {
             let runs: Vec<(Vec<f64>, f64)> = (0..3).map(|_| inputs.time(&gpu, &sorter)).collect();
+            inputs.check(&k, &name);
             let gpu_ms = median(runs.iter().flat_map(|r| r.0.iter().copied()).collect());
             let wall_ms = median(runs.iter().map(|r| r.1).collect());
             let (cub_col, ratio) = match cub_n {
