@@ -58,6 +58,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         dispatch_times: false,
         msaa: 1,
         light_record: Default::default(),
+        shadow: Default::default(),
         width: WIDTH,
         height: HEIGHT,
         tile_size: 16,

@@ -47,6 +47,25 @@ pub struct RenderArgs {
     /// `lights::spot_cones`), in [0, 1]; scene descriptions use `[lights] spot_fraction`.
     #[arg(long, default_value_t = 0.0, value_parser = parse_fraction, allow_negative_numbers = true)]
     pub spot_fraction: f32,
+    /// Share of the `--lights` that cast shadows (spread evenly, `lights::shadow_casters`), in
+    /// [0, 1]; scene descriptions use `[lights] shadow_fraction` or `shadows = true` per light.
+    /// Techniques that render shadows (cube shadow maps) draw them; the others refuse.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_fraction, allow_negative_numbers = true)]
+    pub shadow_fraction: f32,
+    /// Texels per side of each face of a shadow-casting light's cube shadow map (1..=4096;
+    /// 24 · N² bytes per shadow-casting light).
+    #[arg(long, default_value_t = crate::render::shadow_maps::DEFAULT_RESOLUTION)]
+    pub shadow_resolution: u32,
+    /// How the shadow lookup filters: `nearest` (one texel) or `bilinear` (2 × 2 percentage-closer
+    /// filtering).
+    #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowFilter::Bilinear)]
+    pub shadow_filter: crate::render::shadow_maps::ShadowFilter,
+    /// Shade the frame on the CPU from the technique's read-back G-buffer, with exact ray-cast
+    /// shadows for the lights that cast them (`render::cpu_shading`: the reference shadowed
+    /// techniques are held to). Not with MSAA, NURBS patches, transparent materials or a debug
+    /// view; alpha-tested triangles occlude whole.
+    #[arg(long)]
+    pub shadow_reference: bool,
     /// What the frame shows.
     #[arg(long, value_parser = frame_view_parser(), default_value = "shaded")]
     pub view: View,
@@ -139,6 +158,7 @@ impl RenderArgs {
             dispatch_times: self.dispatch_times,
             msaa: self.msaa,
             light_record: self.light_record,
+            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter },
         }
     }
 }
@@ -213,8 +233,13 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         let cones = lights::spot_cones(generated.len(), a.spot_fraction, a.seed).map_err(bad_input)?;
         let n = generated.len();
         scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
+        for (i, _) in lights::shadow_casters(n, a.shadow_fraction).map_err(bad_input)?.iter().enumerate().filter(|(_, &c)| c) {
+            scene.set_casts_shadows(i, true);
+        }
     } else if a.spot_fraction > 0.0 {
         bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)");
+    } else if a.shadow_fraction > 0.0 {
+        bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description)");
     }
     if let Some(t) = a.time {
         scene.lights = lights::animate(&scene.lights, t);
@@ -224,10 +249,16 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
     scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
     check_scene(gpu, a, &scene)?;
+    check_shadows(a, &scene)?;
     let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
     let mut input = scene_input(&scene, &flat, &scene.lights);
     input.nurbs_tolerance = a.tess_error;
-    let settings = a.settings(a.frames, a.stats.is_some());
+    // The reference shades on the CPU: the GPU frame renders without shadows and is read back.
+    if a.shadow_reference {
+        input.shadows = &[];
+    }
+    let settings = a.settings(a.frames, a.stats.is_some() || a.shadow_reference);
+    render::renderer::check_shadow_scene(&input, &settings).map_err(bad_input)?;
     let patches = if scene.nurbs.is_empty() { String::new() } else { format!(", {} NURBS patches", scene.nurbs.len()) };
     eprintln!("rendering {} ({} triangles{patches}, {} lights) at {}x{} with {:?}", scene.name, scene.triangle_count(), scene.lights.len(), a.frame.width, a.frame.height, a.technique);
     let mut frame = render::render(gpu, &input, &settings)?;
@@ -236,6 +267,18 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     let smallest = scene.lights.iter().map(|l| l.radius).fold(f32::INFINITY, f32::min);
     if frame.light_moved > 0.01 * smallest {
         eprintln!("warning: compact light records move lights by up to {:.3e} (the smallest light radius is {smallest:.3e}): the lights span a large box; --light-record full keeps them exact", frame.light_moved);
+    }
+    if a.shadow_reference {
+        let start = std::time::Instant::now();
+        let shadows = render::cpu_shading::Shadows::of_scene(&scene, &input.view);
+        frame.pixels = render::cpu_shading::shade(&scene, &frame, &settings, Some(&shadows))?;
+        eprintln!(
+            "shadow reference: {} of {} lights cast shadows, {} occluding triangles, shaded on the CPU in {:.1} s",
+            scene.shadow_casters(),
+            scene.lights.len(),
+            shadows.occluders.triangle_count(),
+            start.elapsed().as_secs_f64()
+        );
     }
     if a.view == View::Heatmap && !render::legend::draw(&mut frame.pixels, a.frame.width, a.frame.height, render::HEAT_MAX) {
         eprintln!("note: the frame is too small for the heatmap legend (0 black … {}+ white)", render::HEAT_MAX);
@@ -265,7 +308,28 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// A value in [0, 1] (`--spot-fraction`).
+/// `--shadow-reference` takes what its ray cast and read-back G-buffer hold; alpha-tested
+/// triangles cast whole shadows (neither the shadow maps nor the ray cast read textures).
+fn check_shadows(a: &RenderArgs, scene: &Scene) -> Result<()> {
+    if scene.shadow_casters() > 0 && scene.effects.alpha_test {
+        eprintln!("warning: alpha-tested triangles cast whole shadows (the shadow maps and the ray cast read no textures)");
+    }
+    if !a.shadow_reference {
+        return Ok(());
+    }
+    let refuse = [
+        (a.msaa > 1, "--msaa above 1 (the reference shades one sample per pixel)"),
+        (a.view != View::Shaded, "a --view other than shaded"),
+        (!scene.nurbs.is_empty(), "NURBS patches (the ray cast takes the scene's triangles only)"),
+        (scene.has_transparency(), "transparent materials (the ray cast treats every triangle as opaque)"),
+    ];
+    if let Some((_, what)) = refuse.iter().find(|r| r.0) {
+        bail_input!("--shadow-reference does not take {what}");
+    }
+    Ok(())
+}
+
+/// A value in [0, 1] (`--spot-fraction`, `--shadow-fraction`).
 pub fn parse_fraction(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),

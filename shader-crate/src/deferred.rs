@@ -4,9 +4,11 @@
 //! # Steps
 //!
 //! 1. **G-buffer** (raster, [`crate::raster`]): depth, normal, albedo + material per pixel.
-//! 2. **Shading** — per pixel, [`shading::shade_lights`] over all lights in index order; a light
-//!    that does not touch the pixel adds exactly 0 ([`crate::lighting`]), so the sum equals that
-//!    over the touching lights.
+//! 2. **Shading** — per pixel, [`shading::shade_lights_with`] over all lights in index order; a
+//!    light that does not touch the pixel adds exactly 0 ([`crate::lighting`]), so the sum equals
+//!    that over the touching lights. A shadow-casting light's share is its visibility from the
+//!    frame's cube shadow maps ([`crate::shadow`]; the slot and map bindings alias other buffers
+//!    when the scene has no such light, and the pipelines then hold no lookup).
 //!
 //! 3. **Edge shading** (`--msaa N`, [`crate::msaa`] step 5) — per edge pixel, every sample with
 //!    every light ([`shade_edges_deferred_diffuse`] / `_specular`).
@@ -17,6 +19,7 @@
 use crate::layout::*;
 use crate::light_lists::lights_meeting;
 use crate::shading::{self, linear_index, specular_entries, BACKGROUND_RGBA8};
+use crate::shadow::CubeShadows;
 use crate::{lighting, msaa, reconstruct};
 use spirv_std::glam::{UVec3, Vec3};
 use spirv_std::spirv;
@@ -37,6 +40,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] shadow_maps: &[u32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         let i = linear_index(wg, nwg, local);
@@ -51,7 +56,8 @@ specular_entries! {
         let surface = shading::fetch_surface(p, i, z, normals, albedo[i as usize], materials);
         let all_lights = shading::light_range(0, p.num_lights);
         let mut sum = Vec3::ZERO;
-        shading::shade_lights::<SPECULAR, true, _>(&surface, p.effects, p.num_lights, lights, &all_lights, &mut sum);
+        let shadows = CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        shading::shade_lights_with::<SPECULAR, true, _, _>(&surface, p.effects, p.num_lights, lights, &all_lights, &shadows, &mut sum);
         shading::shade_directional_lights::<SPECULAR>(&surface, p.effects, p.num_lights, lights, &mut sum);
         // The heatmap shows the lights that touch the pixel (the frame-uniform view: no divergence).
         let touching = if p.view == VIEW_HEATMAP { lights_meeting(p.effects, p.num_lights, lights, |_, _| {}, |c, r| lighting::in_range(c, r, surface.pos)) } else { 0 };

@@ -42,3 +42,16 @@ pub fn atomic_max(word: &mut u32, v: u32) {
         *word = (*word).max(v);
     }
 }
+
+/// Atomic minimum on a storage-buffer word.
+#[inline]
+pub fn atomic_min(word: &mut u32, v: u32) {
+    #[cfg(target_arch = "spirv")]
+    unsafe {
+        spirv_std::arch::atomic_u_min::<u32, { spirv_std::memory::Scope::QueueFamily as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v);
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        *word = (*word).min(v);
+    }
+}

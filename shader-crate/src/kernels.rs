@@ -96,8 +96,8 @@ pub const SHADE_EDGES_CLUSTERED_TILES: [Kernel<FrameParams>; 2] =
 pub const SHADE_EDGES_AABB: [Kernel<FrameParams>; 2] = [linear("clustered_aabb::shade_edges_aabb_diffuse", 12), linear("clustered_aabb::shade_edges_aabb_specular", 12)];
 
 // Brute-force deferred reference (`deferred.rs`).
-pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 7);
-pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 7);
+pub const SHADE_DEFERRED_DIFFUSE: Kernel<FrameParams> = linear("deferred::shade_deferred_diffuse", 9);
+pub const SHADE_DEFERRED_SPECULAR: Kernel<FrameParams> = linear("deferred::shade_deferred_specular", 9);
 /// Its MSAA edge pass (`msaa.rs` step 5): the shading buffers and the edge list.
 pub const SHADE_EDGES_DEFERRED: [Kernel<FrameParams>; 2] =
     [linear("deferred::shade_edges_deferred_diffuse", 8), linear("deferred::shade_edges_deferred_specular", 8)];
@@ -403,7 +403,7 @@ pub const TRANSPARENT_WEIGHTED: [[RasterKernel<TransparentParams>; 3]; 2] = [
 ];
 
 /// Every vertex entry point of the raster module (from the handles above).
-pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex];
+pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex, crate::shadow::handles::SHADOW_DISTANCES.vertex];
 /// Every fragment entry point of the raster module (from the handles above).
 pub const FRAGMENT_ENTRIES: &[&str] = &[
     GBUFFER[0].fragment,
@@ -444,4 +444,5 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     TRANSPARENT_WEIGHTED[1][0].fragment,
     TRANSPARENT_WEIGHTED[1][1].fragment,
     TRANSPARENT_WEIGHTED[1][2].fragment,
+    crate::shadow::handles::SHADOW_DISTANCES.fragment,
 ];

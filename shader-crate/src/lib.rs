@@ -35,6 +35,8 @@
 //! * [`tile_cull`] — tile depth bounds, frustum and 2.5D mask (tiled, tiled-2.5d, Forward+; its
 //!   pure tests also serve raster passes).
 //! * [`fragment_atomics`] — atomics on storage-buffer words from fragment shaders.
+//! * [`shadow`] — cube shadow maps: the raster pass that fills them and the per-light lookup
+//!   of the shading loop.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -126,6 +128,7 @@ pub mod raster_transparent;
 pub mod reconstruct;
 pub mod scan;
 pub mod shading;
+pub mod shadow;
 pub mod spot;
 #[cfg(test)]
 mod sort_acceptance_tests;

@@ -58,6 +58,9 @@ pub const EFFECT_DIRECTIONAL: u32 = 128;
 /// Accuracy study: spot lights are culled by their range sphere only (no cone test): the image
 /// is the same, the lists longer.
 pub const EFFECT_CULL_SPHERE_ONLY: u32 = 2048;
+/// The scene has shadow-casting lights (`crate::shadow`): the shading loop multiplies each
+/// light by its visibility from the frame's cube shadow maps.
+pub const EFFECT_SHADOWS: u32 = 8192;
 /// First bit of the directional-light count in the effect word (3 bits).
 pub const DIRECTIONAL_COUNT_SHIFT: u32 = 8;
 /// Most directional lights a scene may have (a small fixed loop in every shading pass).
@@ -79,19 +82,21 @@ const _: () = assert!(LIGHT_TYPES_SPEC_ID == 0);
 ///  bit  7     EFFECT_DIRECTIONAL
 ///  bits 8–10  directional count (0 ..= MAX_DIRECTIONAL_LIGHTS)
 ///  bit  12    EFFECT_COMPACT_LIGHTS (compact_light: 16-byte point-light records)
+///  bit  13    EFFECT_SHADOWS (shadow: cube shadow maps looked up per light)
 /// ```
-pub const LIGHT_TYPE_MASK: u32 = EFFECT_SPOT | EFFECT_DIRECTIONAL | (7 << DIRECTIONAL_COUNT_SHIFT) | EFFECT_COMPACT_LIGHTS;
+pub const LIGHT_TYPE_MASK: u32 = EFFECT_SPOT | EFFECT_DIRECTIONAL | (7 << DIRECTIONAL_COUNT_SHIFT) | EFFECT_COMPACT_LIGHTS | EFFECT_SHADOWS;
 /// Distinct light-type specializations: spots or not × 0 ..= 4 directional lights × full or
 /// compact records ([`crate::compact_light`]; compact records hold point lights only, so one
-/// compact variant is ever created).
-pub const LIGHT_TYPE_VARIANTS: usize = 4 * (MAX_DIRECTIONAL_LIGHTS as usize + 1);
+/// compact variant is ever created) × shadows or not.
+pub const LIGHT_TYPE_VARIANTS: usize = 8 * (MAX_DIRECTIONAL_LIGHTS as usize + 1);
 
 /// Index in `0..LIGHT_TYPE_VARIANTS` of the light-type mix of `effects` (the host's pipeline
-/// cache key): `spot + 2 · directional count + 10 · compact`.
+/// cache key): `spot + 2 · directional count + 10 · compact + 20 · shadows`.
 #[inline]
 pub fn light_type_variant(effects: u32) -> usize {
     let compact = usize::from(effects & EFFECT_COMPACT_LIGHTS != 0);
-    usize::from(effects & EFFECT_SPOT != 0) + 2 * directional_count(effects) as usize + LIGHT_TYPE_VARIANTS / 2 * compact
+    let shadows = usize::from(effects & EFFECT_SHADOWS != 0);
+    usize::from(effects & EFFECT_SPOT != 0) + 2 * directional_count(effects) as usize + LIGHT_TYPE_VARIANTS / 4 * compact + LIGHT_TYPE_VARIANTS / 2 * shadows
 }
 
 /// Push constants that carry a [`FrameParams`]: what [`specialise`] rewrites.

@@ -33,7 +33,8 @@
 //! branches away.
 use crate::compact_light::light_at;
 use crate::layout::*;
-use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SPOT};
+use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SHADOWS, EFFECT_SPOT};
+use crate::shadow::{NoShadows, Shadowing};
 use crate::{lighting, octahedral, reconstruct, spot};
 use spirv_std::glam::{UVec3, Vec3};
 
@@ -329,12 +330,27 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
     list: &L,
     sum: &mut Vec3,
 ) -> u32 {
+    shade_lights_with::<SPECULAR, UNROLLED, L, NoShadows>(s, frame_effects, num_lights, lights, list, &NoShadows, sum)
+}
+
+/// [`shade_lights`] with each light's radiance times its visibility from `shadows` where the
+/// frame has shadow-casting lights ([`EFFECT_SHADOWS`]; `crate::shadow`).
+#[inline]
+pub fn shade_lights_with<const SPECULAR: bool, const UNROLLED: bool, L: LightList, S: Shadowing>(
+    s: &Surface,
+    frame_effects: u32,
+    num_lights: u32,
+    lights: &[PointLight],
+    list: &L,
+    shadows: &S,
+    sum: &mut Vec3,
+) -> u32 {
     let effects = variant_effects::<SPECULAR>(frame_effects);
     // The normal is normalised once here, not once per light (`lighting::shade_unit_normal`).
     let s = &Surface { normal: lighting::unit_normal(s.normal), ..*s };
     if UNROLLED {
         if let Some(end) = list.end() {
-            return shade_range::<SPECULAR, L>(s, effects, num_lights, lights, list, end, sum);
+            return shade_range::<SPECULAR, L, S>(s, effects, num_lights, lights, list, end, shadows, sum);
         }
     }
     let mut walked = 0;
@@ -344,16 +360,16 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
         if UNROLLED {
             unroll8!(_u => {
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
+                    more = shade_next::<SPECULAR, L, S>(s, effects, num_lights, lights, list, &mut pos, shadows, sum);
                     walked += more as u32;
                 }
                 if more {
-                    more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
+                    more = shade_next::<SPECULAR, L, S>(s, effects, num_lights, lights, list, &mut pos, shadows, sum);
                     walked += more as u32;
                 }
             });
         } else {
-            more = shade_next::<SPECULAR, L>(s, effects, num_lights, lights, list, &mut pos, sum);
+            more = shade_next::<SPECULAR, L, S>(s, effects, num_lights, lights, list, &mut pos, shadows, sum);
             walked += more as u32;
         }
     }
@@ -368,7 +384,8 @@ pub fn shade_lights<const SPECULAR: bool, const UNROLLED: bool, L: LightList>(
 /// 1080p, `clustered-bvh` shading at 10k / 1M lights) 8 ahead took 0.243 / 0.611 ms, 4 ahead
 /// 0.199 / 0.475, 2 ahead 0.185 / 0.431, one after the other 0.180 / 0.425.
 #[inline]
-fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, end: u32, sum: &mut Vec3) -> u32 {
+#[allow(clippy::too_many_arguments)]
+fn shade_range<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, end: u32, shadows: &S, sum: &mut Vec3) -> u32 {
     let first = list.start();
     if end <= first {
         return 0;
@@ -379,11 +396,11 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, nu
     let mut t = first;
     while t < end {
         let l = list.at(t);
-        *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
+        *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
         t += 1;
         if t < end {
             let l = list.at(t);
-            *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
+            *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
             t += 1;
         }
     }
@@ -393,12 +410,19 @@ fn shade_range<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, nu
 /// The radiance of punctual light `l` (record `light`) at `s` (unit normal, [`shade_lights`]):
 /// [`lighting::shade_variant`],
 /// times its cone falloff ([`spot::spot_factor`]) when the frame has spot lights
-/// ([`EFFECT_SPOT`]; a point light's marker record gives exactly 1).
+/// ([`EFFECT_SPOT`]; a point light's marker record gives exactly 1), times its visibility
+/// where the frame has shadow-casting lights ([`EFFECT_SHADOWS`]; looked up only where the light
+/// adds something).
 #[inline]
-fn shade_one<const SPECULAR: bool>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight) -> Vec3 {
+fn shade_one<const SPECULAR: bool, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight, shadows: &S) -> Vec3 {
     let radiance = lighting::shade_unit_normal::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
-    if effects & EFFECT_SPOT != 0 {
+    let radiance = if effects & EFFECT_SPOT != 0 {
         radiance * spot::spot_factor(Vec3::from_array(light.position), &cone_of(lights, num_lights, l), s.pos)
+    } else {
+        radiance
+    };
+    if effects & EFFECT_SHADOWS != 0 && radiance.max_element() > 0.0 {
+        radiance * shadows.visibility(l, Vec3::from_array(light.position), s.pos, s.normal)
     } else {
         radiance
     }
@@ -408,13 +432,13 @@ fn shade_one<const SPECULAR: bool>(s: &Surface, effects: u32, num_lights: u32, l
 /// false at the end of the list.
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn shade_next<const SPECULAR: bool, L: LightList>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, pos: &mut u32, sum: &mut Vec3) -> bool {
+fn shade_next<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], list: &L, pos: &mut u32, shadows: &S, sum: &mut Vec3) -> bool {
     let (l, next) = list.step(*pos);
     if l == NO_LIGHT {
         return false;
     }
     *pos = next;
-    *sum += shade_one::<SPECULAR>(s, effects, num_lights, lights, l, &light_at(lights, effects, l));
+    *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
     true
 }
 

@@ -4,7 +4,6 @@ use super::pixels::worst_channel;
 use super::render::{frame, label, runs, Run};
 use host::gpu::Gpu;
 use host::render::{reference, Frame, Settings, Technique};
-use host::scene::flatten::flatten;
 use host::scene::Scene;
 use shaders::layout::PointLight;
 
@@ -49,43 +48,8 @@ pub fn geometry_pixels(f: &Frame) -> usize {
     f.readback.as_ref().expect("a read-back frame").depth.iter().filter(|&&d| f32::from_bits(d) > 0.0).count()
 }
 
-/// The frame as the CPU shades it from the frame's read-back G-buffer (depth, decoded normals,
-/// albedo and material) and view-space lights: every light that touches a pixel, through
-/// `lighting::shade` and the output encoding, in f32 like the GPU; a spot light's times its cone
-/// falloff (`spot::spot_factor`), and the scene's directional lights added
-/// (`lighting::shade_directional`), from the light records the kernels read. What every
-/// technique must show (within [`TOLERANCE`]).
+/// The frame as the CPU shades it from its read-back G-buffer, without shadows
+/// (`render::cpu_shading`): what every technique must show (within [`TOLERANCE`]).
 pub fn cpu_shaded(scene: &Scene, f: &Frame, s: &Settings) -> Vec<u32> {
-    use shaders::light_types::{cone_of, directional_base, light_effects};
-    use shaders::lighting::{encode_srgb8, light_touches, shade, shade_directional, tonemap};
-    use shaders::reconstruct::{distance_from_depth, is_background, view_position};
-    let rb = f.readback.as_ref().expect("a read-back frame");
-    let materials = flatten(scene, s.normal_precision).unwrap().materials;
-    let effects = scene.effects.flags();
-    let spots = scene.spots.iter().any(Option::is_some);
-    let n_lights = rb.lights_view.len() as u32;
-    let base = directional_base(light_effects(spots, scene.directional.len() as u32), n_lights) as usize;
-    let directional = &rb.light_records[base..base + scene.directional.len()];
-    let g = &f.grid;
-    (0..rb.depth.len())
-        .map(|i| {
-            let depth = f32::from_bits(rb.depth[i]);
-            if is_background(depth) {
-                return shaders::shading::BACKGROUND_RGBA8;
-            }
-            let p = view_position(g, i as u32 % g.width, i as u32 / g.width, distance_from_depth(g.near, depth));
-            let n = glam::Vec3::from_array(rb.normals[i]);
-            let (albedo, m) = shaders::shading::gbuffer_albedo(rb.albedo[i]);
-            let mat = materials[m as usize];
-            let cone = |i: usize, l: &PointLight| if spots { shaders::spot::spot_factor(glam::Vec3::from_array(l.position), &cone_of(&rb.light_records, n_lights, i as u32), p) } else { 1.0 };
-            let punctual = rb.lights_view.iter().enumerate().filter(|(_, l)| light_touches(l, p));
-            let sum = punctual.fold(glam::Vec3::ZERO, |sum, (i, l)| sum + shade(p, n, albedo, mat.specular, mat.roughness, l, effects) * cone(i, l));
-            let sun = |d: &PointLight| {
-                let (to_light, colour) = (glam::Vec3::from_array(d.position), glam::Vec3::from_array(d.colour));
-                shade_directional::<true>(p, n, albedo, mat.specular, mat.roughness, to_light, colour, d.intensity, effects)
-            };
-            let sum = directional.iter().fold(sum, |sum, d| sum + sun(d));
-            encode_srgb8(tonemap(sum, s.exposure))
-        })
-        .collect()
+    host::render::cpu_shading::shade(scene, f, s, None).expect("the CPU shading of a read-back frame")
 }

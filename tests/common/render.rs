@@ -30,6 +30,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         dispatch_times: false,
         msaa: 1,
         light_record: Default::default(),
+        shadow: Default::default(),
     }
 }
 

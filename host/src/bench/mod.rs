@@ -287,6 +287,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         dispatch_times: false,
         msaa: 1,
         light_record: Default::default(),
+        shadow: Default::default(),
     }
 }
 

@@ -78,6 +78,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    shadows: false,
 };
 
 pub const CLUSTERED_BVH: Description = Description {

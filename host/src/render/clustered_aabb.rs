@@ -36,6 +36,7 @@ pub const CLUSTERED_AABB: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    shadows: false,
 };
 
 pub struct ClusteredAabb {

@@ -1,5 +1,6 @@
 //! `deferred`: every light for every pixel after the G-buffer — the brute-force reference every
-//! other technique is checked against. One kernel (`shade_deferred`); no buffers of its own but
+//! other technique is checked against; with shadow-casting lights, each one's share times its
+//! visibility from the cube shadow maps (`shadow_maps.rs`). One kernel (`shade_deferred`); no buffers of its own but
 //! those of the transparent pass (`transparent.rs`, every light for every transparent fragment
 //! and the `--oit` resolve), for scenes with transparent draws.
 use super::technique::{boxed, llvmpipe_chunked_lights, Description, FrameInputs, LightCost, LightingTechnique, TransparentDraws};
@@ -24,6 +25,7 @@ pub const DEFERRED: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    shadows: true,
 };
 
 pub struct Deferred {
@@ -45,10 +47,11 @@ impl Deferred {
 impl LightingTechnique for Deferred {
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let (t, p) = (f.targets, &f.params);
+        let [slots, maps] = f.shadow_buffers();
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
                 super::shading_pipeline(&gpu.kernels.shade_deferred, p)?,
-                &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds],
+                &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, slots, maps],
                 p,
                 p.count,
             )

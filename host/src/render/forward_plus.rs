@@ -127,6 +127,7 @@ pub const FORWARD_PLUS: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    shadows: false,
 };
 
 /// What `--msaa N` (N > 1) adds (`shaders::forward_msaa`): the pre-pass's and the forward pass's

@@ -34,6 +34,7 @@ pub mod bvh;
 pub mod camera_relative;
 pub mod clustered;
 pub mod clustered_aabb;
+pub mod cpu_shading;
 pub mod deferred;
 pub mod forward_plus;
 pub mod frame_time;
@@ -45,6 +46,7 @@ pub mod light_types;
 pub mod msaa;
 pub mod nurbs;
 pub mod reference;
+pub mod shadow_maps;
 pub mod renderer;
 pub mod sort;
 pub mod stats;
@@ -145,6 +147,10 @@ pub struct SceneInput<'a> {
     pub lights: &'a [PointLight],
     /// Per light, its cone if it is a spot light; empty when no light is (`light_types`).
     pub spots: &'a [Option<light_types::Spot>],
+    /// Per light, whether it casts shadows; empty when none does. No technique renders shadows
+    /// yet: the renderer refuses a frame with a shadow-casting light in one line
+    /// (`cpu_shading` shades its ray-cast reference).
+    pub shadows: &'a [bool],
     /// Directional lights (at most `shaders::light_types::MAX_DIRECTIONAL_LIGHTS`).
     pub directional: &'a [light_types::Directional],
     /// Textures the draws index (`Draw::albedo_texture` / `mask_texture`).
@@ -198,6 +204,9 @@ pub struct Settings {
     pub msaa: u32,
     /// How the light buffer stores point lights (`--light-record`).
     pub light_record: light_record::LightRecord,
+    /// The cube shadow maps' resolution and filter (`--shadow-resolution`, `--shadow-filter`;
+    /// read only where lights cast shadows).
+    pub shadow: shadow_maps::ShadowSettings,
 }
 
 /// GPU results kept for checks and statistics.
@@ -266,6 +275,8 @@ pub struct Frame {
     /// The farthest a light moved in the light buffer's records (view space; 0 for full records,
     /// at most half a grid step's diagonal for compact ones: `light_record::light_buffer`).
     pub light_moved: f32,
+    /// Lights that cast shadows through the frame's shadow maps (0: none were made).
+    pub shadow_casters: usize,
 }
 
 impl Frame {

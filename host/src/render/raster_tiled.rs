@@ -35,6 +35,7 @@ pub const RASTER_TILED: Description = Description {
     own_kernels: handles::COMPUTE,
     own_raster: handles::RASTER,
     msaa: true,
+    shadows: false,
 };
 
 /// Entries of each tile's first list.

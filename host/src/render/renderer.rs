@@ -9,7 +9,10 @@
 //! ([`Renderer::set_lights`]) or changes the technique or the view ([`Renderer::set_settings`]:
 //! the technique is created anew). A new frame size is a new renderer.
 use super::technique::{ClusterLists, FrameInputs, LightingTechnique, ListStats, MAX_REGROWTHS};
+use super::Technique;
 use super::light_types::{self, light_records};
+use super::shadow_maps::ShadowMaps;
+use shaders::light_types as light_types_bits;
 use super::{frame_time, gbuffer, lights_to_view, transparent, Frame, Readback, SceneInput, Settings, ViewTransform, HEAT_MAX};
 use crate::gpu::Gpu;
 use crate::vk::{Buffer, PassTiming, Profiler, Queue};
@@ -59,6 +62,8 @@ struct Resources {
     frame: Buffer,
     /// The device compares timestamps across queues (`DeviceInfo::timestamps_across_queues`).
     across_queues: bool,
+    /// The cube shadow maps (scenes with shadow-casting lights; `shadow_maps.rs`).
+    shadows: Option<ShadowMaps>,
 }
 
 impl Resources {
@@ -77,6 +82,7 @@ impl Resources {
             materials: &self.materials,
             bounds: &self.bounds_buf,
             frame: &self.frame,
+            shadows: self.shadows.as_ref(),
         }
     }
 
@@ -91,6 +97,7 @@ impl Resources {
         ];
         v.extend(self.tessellation.iter().flat_map(|t| t.buffers()));
         v.extend(self.msaa.iter().flat_map(|m| m.buffers()));
+        v.extend(self.shadows.iter().flat_map(|m| m.buffers()));
         v
     }
 
@@ -105,8 +112,45 @@ impl Resources {
             // The preflight's refusal (`preflight::check_msaa`), for a technique changed later.
             bail!("--msaa {}: {} shades once per pixel (it has no per-sample edge pass)", s.msaa, s.technique.name());
         }
+        if let Some(sh) = self.shadows.as_ref().filter(|_| !s.technique.description().shadows) {
+            bail!("{}", no_shadows(s.technique, sh.casters(), self.lights_view.len()));
+        }
         s.technique.create(gpu, &self.inputs())
     }
+}
+
+/// The refusal of a technique that renders no shadows.
+fn no_shadows(t: Technique, casters: usize, lights: usize) -> String {
+    let with: Vec<&str> = Technique::ALL.iter().filter(|t| t.description().shadows).map(|t| t.name()).collect();
+    format!("{casters} of {lights} lights cast shadows, but {} renders no shadows (techniques that do: {})", t.name(), with.join(", "))
+}
+
+/// Refuses, in one line, scenes with shadow-casting lights that the technique or the shadow
+/// maps would render wrongly: the technique must render shadows, and the maps they shade one sample per pixel, read full light records, draw the meshes' opaque
+/// triangles (not tessellated NURBS grids), and the transparent pass shades without them.
+pub fn check_shadow_scene(scene: &SceneInput<'_>, s: &Settings) -> Result<()> {
+    let casters = scene.shadows.iter().filter(|&&c| c).count();
+    if casters == 0 {
+        return Ok(());
+    }
+    let n = scene.lights.len();
+    if !s.technique.description().shadows {
+        bail!("{}", no_shadows(s.technique, casters, n));
+    }
+    super::shadow_maps::check_resolution(s.shadow.resolution)?;
+    if s.msaa > 1 {
+        bail!("--msaa {}: {casters} of {n} lights cast shadows, and shadows are shaded once per pixel: render them at --msaa 1", s.msaa);
+    }
+    if s.light_record != super::light_record::LightRecord::Full {
+        bail!("--light-record compact: {casters} of {n} lights cast shadows, and the shadow maps take full light records");
+    }
+    if scene.draws.iter().any(|d| gbuffer::is_transparent(d, &scene.materials)) {
+        bail!("{casters} of {n} lights cast shadows, but the scene has transparent materials, which are shaded without shadows");
+    }
+    if scene.draws.iter().any(|d| d.indirect.is_some()) || !scene.nurbs.is_empty() {
+        bail!("{casters} of {n} lights cast shadows, but the scene has NURBS patches, which the shadow maps do not draw");
+    }
+    Ok(())
 }
 
 /// Timed scopes per submission with `Settings::dispatch_times`: the passes and every dispatch,
@@ -154,6 +198,7 @@ impl Renderer {
     pub fn new(gpu: &Gpu, scene: &SceneInput<'_>, s: &Settings) -> Result<Self> {
         let grid = ClusterGrid::new(s.width, s.height, s.tile_size, scene.near, scene.far, scene.fov_y_radians).context("cluster grid")?;
         let grid = ClusterGrid { samples: s.msaa.max(1), ..grid };
+        check_shadow_scene(scene, s)?;
         if scene.materials.is_empty() || scene.materials.len() > MAX_MATERIALS as usize {
             bail!("{} materials: the G-buffer addresses 1..={MAX_MATERIALS}", scene.materials.len());
         }
@@ -192,12 +237,14 @@ impl Renderer {
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
         let frame = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
+        let shadows = ShadowMaps::new(ctx, &gpu.graphics_module, scene.shadows, &lights_view, s.shadow)?;
+        let shadow_effect = if shadows.is_some() { light_types_bits::EFFECT_SHADOWS } else { 0 };
         let params = FrameParams {
             grid,
             count: n,
             num_lights: scene.lights.len() as u32,
             light_capacity: 0,
-            effects: scene.effects | light_types::light_effects(scene.spots, scene.directional)? | s.light_record.effects(),
+            effects: scene.effects | light_types::light_effects(scene.spots, scene.directional)? | s.light_record.effects() | shadow_effect,
             normal_precision: s.normal_precision.code(),
             view: s.view.code(),
             exposure: s.exposure,
@@ -229,6 +276,7 @@ impl Renderer {
             bounds_buf,
             frame,
             across_queues: ctx.info.timestamps_across_queues,
+            shadows,
         };
         let tech = res.technique(gpu)?;
         // Room for every pass, and with `dispatch_times` for every command inside them.
@@ -274,9 +322,12 @@ impl Renderer {
                     if let Some(t) = &res.tessellation {
                         rec.pass("tessellation", |rec| t.record(rec, &res.geometry))?;
                     }
-                    match res.settings.technique.description().gbuffer {
-                        true => rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets, res.msaa.as_ref(), &res.params)),
-                        false => Ok(()),
+                    if res.settings.technique.description().gbuffer {
+                        rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets, res.msaa.as_ref(), &res.params))?;
+                    }
+                    match &res.shadows {
+                        Some(sh) => rec.pass("shadow maps", |rec| sh.record(rec, &res.geometry, &res.camera)),
+                        None => Ok(()),
                     }
                 },
                 |rec| tech.record(gpu, rec, &inputs),
@@ -327,6 +378,14 @@ impl Renderer {
     pub fn set_lights(&mut self, gpu: &Gpu, world_lights: &[PointLight], spots: &[Option<light_types::Spot>]) -> Result<()> {
         let (records, lights_view, light_moved) = super::light_record::light_buffer(self.res.settings.light_record, &self.res.view, lights_to_view(&self.res.view, world_lights)?, spots, &self.res.directional)?;
         let effects = (self.res.params.effects & !shaders::light_types::EFFECT_SPOT) | light_types::light_effects(spots, &self.res.directional)?;
+        if let Some(sh) = &mut self.res.shadows {
+            // The shadow flags belong to the lights the renderer was made with.
+            if lights_view.len() != self.res.lights_view.len() {
+                let n = self.res.lights_view.len();
+                bail!("{} lights in place of {}: the scene's lights cast shadows, and their flags are per light", lights_view.len(), n);
+            }
+            sh.lights_moved(&lights_view)?;
+        }
         if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;
             self.res.lights_view = lights_view;
@@ -480,6 +539,7 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
         },
         samples: res.grid.samples,
         light_moved: res.light_moved,
+        shadow_casters: res.shadows.as_ref().map_or(0, |m| m.casters()),
         bytes_per_sample: r.msaa_bytes_per_sample.unwrap_or_else(|| super::msaa::bytes_per_sample(res.settings.normal_precision)),
         edge_pixels: match (&mut res.msaa, r.msaa_edge_pixels) {
             (_, Some(n)) => n,

@@ -53,6 +53,12 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
             "samples": frame.samples, "edge_pixels": frame.edge_pixels,
             "bytes_per_sample": frame.bytes_per_sample,
             "gbuffer_bytes": frame.buffers.iter().find(|b| b.0 == "gbuffer").map(|b| b.1) })),
+        // Cube shadow maps, where lights cast shadows: casters, texels per face side, the
+        // lookup's filter and the maps' bytes (`render::shadow_maps`).
+        "shadows": (frame.shadow_casters > 0).then(|| json!({
+            "casters": frame.shadow_casters, "resolution": s.shadow.resolution,
+            "filter": format!("{:?}", s.shadow.filter).to_lowercase(),
+            "map_bytes": frame.buffers.iter().find(|b| b.0 == "shadow maps").map(|b| b.1) })),
         "timed_frames": s.frames,
         "gpu_ms": {
             "passes": passes, "pass_queues": queues,

@@ -69,9 +69,21 @@ pub struct FrameInputs<'a> {
     pub bounds: &'a Buffer,
     /// The output frame (one packed RGBA8 word per pixel).
     pub frame: &'a Buffer,
+    /// The cube shadow maps (scenes with shadow-casting lights only).
+    pub shadows: Option<&'a super::shadow_maps::ShadowMaps>,
 }
 
 impl FrameInputs<'_> {
+    /// The shadow slots and maps a shading kernel binds after its own buffers
+    /// (`shaders::shadow::CubeShadows`); without shadow-casting lights, the light buffer twice in
+    /// their place (the pipelines then hold no lookup, and nothing is allocated for them).
+    pub fn shadow_buffers(&self) -> [&Buffer; 2] {
+        match self.shadows {
+            Some(s) => [&s.slots, &s.maps],
+            None => [self.lights, self.lights],
+        }
+    }
+
     /// The bindings of a draw of a raster pass: the vertex stage's storage buffers, `extra`
     /// storage buffers of the fragment stage, then the draw's `textures` (0, 1 or 2).
     pub fn draw_bindings<'b>(&'b self, extra: &[&'b Buffer], draw: &Draw, textures: usize) -> Vec<Binding<'b>> {
@@ -143,6 +155,10 @@ pub struct Description {
     /// `render/msaa.rs`: [`FrameInputs::msaa`] is then set and its `record` adds the edge pass);
     /// `--msaa` above 1 is refused in one line for the others.
     pub msaa: bool,
+    /// Whether its shading multiplies each shadow-casting light by its visibility from the
+    /// frame's cube shadow maps (`shadow_maps.rs`; it binds [`FrameInputs::shadow_buffers`]);
+    /// scenes with shadow-casting lights are refused in one line for the others.
+    pub shadows: bool,
 }
 
 /// How a technique meets a scene with transparent draws.

@@ -27,6 +27,7 @@ pub const TILED: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    shadows: false,
 };
 
 pub const TILED_25D: Description = Description {

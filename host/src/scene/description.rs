@@ -25,6 +25,8 @@
 //!                                 # the scene diagonal
 //! spot_fraction = 0.3             # optional, in [0, 1]: this share of the lights are spots
 //!                                 # (lights::spot_cones), default 0
+//! shadow_fraction = 0.1           # optional, in [0, 1]: this share of the lights cast shadows
+//!                                 # (lights::shadow_casters), default 0
 //! [[light]]                       # optional, repeatable: an explicit light (world space)
 //! type = "point"                  # optional: point (default) | spot | directional
 //! position = [0, 3, -10]          # point and spot
@@ -35,6 +37,7 @@
 //! colour = [1, 0.8, 0.6]          # optional, default white
 //! intensity = 20                  # optional, default: lights.rs rule for the radius (1 for
 //!                                 # directional lights)
+//! shadows = true                  # point and spot, optional: the light casts shadows
 //! [[material]]                    # optional, repeatable: override a material of the geometry
 //! name = "fabric_c"               # every material of that name (exact, case-sensitive)
 //! opacity = 0.6                   # optional, in [0, 1] (1 opaque)
@@ -189,6 +192,8 @@ pub struct LightDesc {
     pub colour: Option<[f32; 3]>,
     /// Default: [`default_intensity`]`(radius)`.
     pub intensity: Option<f32>,
+    /// Point and spot lights: casts shadows (default false).
+    pub shadows: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -222,6 +227,8 @@ pub struct LightsDesc {
     pub offset: Option<f32>,
     /// Share of the generated lights that are spots, in [0, 1].
     pub spot_fraction: Option<f32>,
+    /// Share of the generated lights that cast shadows, in [0, 1].
+    pub shadow_fraction: Option<f32>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -324,9 +331,9 @@ fn check(d: &Description) -> Result<()> {
         if l.clusters.is_some() && l.distribution != Distribution::Hotspots {
             bail!("lights.clusters only applies to distribution = \"hotspots\"");
         }
-        if let Some(f) = l.spot_fraction {
-            if !(0.0..=1.0).contains(&f) {
-                bail!("lights.spot_fraction = {f} must be in [0, 1]");
+        for (key, f) in [("lights.spot_fraction", l.spot_fraction), ("lights.shadow_fraction", l.shadow_fraction)] {
+            if let Some(f) = f.filter(|f| !(0.0..=1.0).contains(f)) {
+                bail!("{key} = {f} must be in [0, 1]");
             }
         }
         if l.offset.is_some() && l.distribution != Distribution::Surfaces {
@@ -401,6 +408,7 @@ fn check_light_keys(i: usize, l: &LightDesc) -> Result<()> {
         ("direction", l.direction.is_some(), l.kind != LightType::Point, l.kind != LightType::Point),
         ("inner_angle", l.inner_angle.is_some(), false, l.kind == LightType::Spot),
         ("outer_angle", l.outer_angle.is_some(), false, l.kind == LightType::Spot),
+        ("shadows", l.shadows.is_some(), false, punctual),
     ];
     for (key, given, required, allowed) in present {
         if required && !given {
@@ -559,8 +567,12 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
         let listed = !scene.lights.is_empty() || d.light.iter().any(|l| l.kind != LightType::Directional);
         scene.spot_share = l.spot_fraction.filter(|&f| f > 0.0 && !listed).map(|fraction| lights::SpotShare { fraction, seed });
         // After the geometry's own lights (a glTF file's).
-        let n = generated.len();
+        let (n, first) = (generated.len(), scene.lights.len());
         scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
+        let casters = lights::shadow_casters(n, l.shadow_fraction.unwrap_or(0.0)).map_err(|e| at(anyhow!("[lights]: {e}")))?;
+        for (i, _) in casters.iter().enumerate().filter(|(_, &c)| c) {
+            scene.set_casts_shadows(first + i, true);
+        }
     }
     for l in &d.light {
         let colour = l.colour.unwrap_or([1.0; 3]);
@@ -582,6 +594,9 @@ pub fn load(path: &Path, assets_dir: &Path) -> Result<Scene> {
             outer: l.outer_angle.unwrap_or(45.0).to_radians(),
         });
         scene.add_lights([(light, spot)]);
+        if l.shadows == Some(true) {
+            scene.set_casts_shadows(scene.lights.len() - 1, true);
+        }
     }
     if scene.directional.len() > shaders::light_types::MAX_DIRECTIONAL_LIGHTS as usize {
         return Err(at(anyhow!(

@@ -92,6 +92,7 @@ pub fn scene_input<'a>(scene: &'a Scene, flat: &'a Flattened, lights: &'a [Point
         materials: flat.materials.clone(),
         lights,
         spots: &scene.spots,
+        shadows: &scene.shadows,
         directional: &scene.directional,
         textures: scene
             .textures

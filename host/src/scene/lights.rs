@@ -279,6 +279,15 @@ pub fn animate(base: &[PointLight], t: f32) -> Vec<PointLight> {
         .collect()
 }
 
+/// Which of `n` lights cast shadows for a share `fraction` in [0, 1]: light `i` does where
+/// `⌊(i + 1)·fraction⌋ > ⌊i·fraction⌋`, so `⌊n·fraction⌋` casters spread evenly over the
+/// lights (every light at 1, none at 0).
+pub fn shadow_casters(n: usize, fraction: f32) -> Result<Vec<bool>> {
+    ensure!((0.0..=1.0).contains(&fraction), "shadow fraction {fraction} must be in [0, 1]");
+    let f = fraction as f64;
+    Ok((0..n).map(|i| ((i + 1) as f64 * f).floor() > (i as f64 * f).floor()).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -371,5 +380,17 @@ mod tests {
         for (a, c) in a0.iter().zip(animate(&base, period)) {
             assert!(Vec3::from_array(a.position).distance(Vec3::from_array(c.position)) < 1e-2);
         }
+    }
+
+    #[test]
+    fn shadow_casters_are_the_share_spread_evenly() {
+        assert!(shadow_casters(40, 0.0).unwrap().iter().all(|&c| !c));
+        assert!(shadow_casters(40, 1.0).unwrap().iter().all(|&c| c));
+        let quarter = shadow_casters(40, 0.25).unwrap();
+        assert_eq!(quarter.iter().filter(|&&c| c).count(), 10);
+        // One caster in every run of four lights.
+        assert!(quarter.chunks(4).all(|c| c.iter().filter(|&&c| c).count() == 1), "{quarter:?}");
+        assert_eq!(shadow_casters(7, 0.5).unwrap().iter().filter(|&&c| c).count(), 3);
+        assert!(shadow_casters(3, 1.5).is_err() && shadow_casters(3, f32::NAN).is_err());
     }
 }

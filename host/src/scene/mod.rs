@@ -245,6 +245,9 @@ pub struct Scene {
     /// Where every light of `lights` was generated with a share of spots (`[lights]
     /// spot_fraction`), that share and its seed; `None` where lights are listed one by one.
     pub spot_share: Option<lights::SpotShare>,
+    /// Per light of `lights`, whether it casts shadows; empty when none does (the renderer then
+    /// allocates and records nothing for shadows).
+    pub shadows: Vec<bool>,
     /// Directional lights (world space).
     pub directional: Vec<Directional>,
     pub effects: Effects,
@@ -317,7 +320,7 @@ impl Scene {
     pub fn new(name: &str, meshes: Vec<Mesh>, materials: Vec<Material>, textures: Vec<Texture>, camera: Camera) -> Self {
         let bounds = bounds_of(&meshes);
         let effects = Effects::from_materials(&materials);
-        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], spots: vec![], spot_share: None, directional: vec![], effects, bounds, warnings: vec![] }
+        Self { name: name.to_owned(), meshes, nurbs: vec![], materials, textures, camera, lights: vec![], spots: vec![], spot_share: None, shadows: vec![], directional: vec![], effects, bounds, warnings: vec![] }
     }
 
     /// Adds NURBS patches and grows the bounds by their control points.
@@ -346,7 +349,25 @@ impl Scene {
             if parallel {
                 self.spots.push(s);
             }
+            if !self.shadows.is_empty() {
+                self.shadows.push(false);
+            }
         }
+    }
+
+    /// Makes light `i` of `lights` cast shadows (or not).
+    pub fn set_casts_shadows(&mut self, i: usize, casts: bool) {
+        if casts && self.shadows.is_empty() {
+            self.shadows.resize(self.lights.len(), false);
+        }
+        if let Some(s) = self.shadows.get_mut(i) {
+            *s = casts;
+        }
+    }
+
+    /// Lights that cast shadows.
+    pub fn shadow_casters(&self) -> usize {
+        self.shadows.iter().filter(|&&s| s).count()
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -419,6 +440,9 @@ impl Scene {
         }
         if !self.spots.is_empty() && self.spots.len() != self.lights.len() {
             bail!("scene has {} spot records for {} lights", self.spots.len(), self.lights.len());
+        }
+        if !self.shadows.is_empty() && self.shadows.len() != self.lights.len() {
+            bail!("scene has {} shadow flags for {} lights", self.shadows.len(), self.lights.len());
         }
         for (i, s) in self.spots.iter().enumerate() {
             if let Some(s) = s {

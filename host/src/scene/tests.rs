@@ -454,3 +454,32 @@ fn unit_vectors_survive_tiny_and_huge_components() {
         assert_eq!(unit_vector(v), None, "{v}");
     }
 }
+
+/// `[[light]] shadows = true` and `[lights] shadow_fraction` mark the lights that cast shadows
+/// (evenly spread, `⌊n·fraction⌋` of them); a scene without any keeps no flags; directional
+/// lights and fractions out of range are one-line errors.
+#[test]
+fn descriptions_with_shadow_casting_lights() {
+    let dir = TempDir::new("desc-shadows");
+    let p = dir.write(
+        "s.toml",
+        "geometry = \"city\"\n[lights]\ncount = 8\ndistribution = \"uniform\"\nshadow_fraction = 0.25\n\
+         [[light]]\nposition = [0, 3, 0]\nradius = 5\n\
+         [[light]]\nposition = [0, 3, 0]\nradius = 5\nshadows = true\n\
+         [[light]]\nposition = [0, 3, 0]\nradius = 5\nshadows = false\n",
+    );
+    let s = Scene::load(p.to_str().unwrap(), &assets()).unwrap();
+    let flags: Vec<usize> = s.shadows.iter().enumerate().filter(|(_, &c)| c).map(|(i, _)| i).collect();
+    assert_eq!((s.shadows.len(), flags), (11, vec![3, 7, 9]));
+    assert_eq!(s.shadow_casters(), 3);
+    let p = dir.write("none.toml", "geometry = \"city\"\n[lights]\ncount = 8\ndistribution = \"uniform\"\n[[light]]\nposition = [0, 3, 0]\nradius = 5\nshadows = false\n");
+    assert!(Scene::load(p.to_str().unwrap(), &assets()).unwrap().shadows.is_empty(), "no shadow flags without a caster");
+    let e = description_err("geometry = \"city\"\n[[light]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nshadows = true\n");
+    assert!(e.contains("light[0].shadows does not apply to a directional light") && !e.contains('\n'), "{e}");
+    let e = description_err("geometry = \"city\"\n[lights]\ncount = 5\ndistribution = \"uniform\"\nshadow_fraction = -0.5\n");
+    assert!(e.contains("lights.shadow_fraction = -0.5 must be in [0, 1]"), "{e}");
+    for (n, f, casters) in [(0, 0.5, 0), (7, 0.0, 0), (7, 1.0, 7), (10, 0.3, 3), (3, 0.5, 1)] {
+        assert_eq!(lights::shadow_casters(n, f).unwrap().iter().filter(|&&c| c).count(), casters, "{n} lights, fraction {f}");
+    }
+    assert!(lights::shadow_casters(3, 1.5).is_err());
+}

@@ -128,6 +128,14 @@ impl Recorder<'_> {
         Ok(())
     }
 
+    /// [`Recorder::draw_indexed`] `instances` times (instance index `0..instances`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw_indexed_instanced<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, first_index: u32, index_count: u32, instances: u32) -> VkResult<()> {
+        self.bind_draw(pipe, bindings, params)?;
+        unsafe { self.ctx.device.cmd_draw_indexed(self.cmd, index_count, instances, first_index, 0, 0) };
+        Ok(())
+    }
+
     /// Draws vertices `0..vertex_count` without indices (the vertex shader makes each vertex
     /// from its index), as [`Recorder::draw_indexed`] otherwise.
     pub fn draw<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, vertex_count: u32) -> VkResult<()> {
