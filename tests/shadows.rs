@@ -4,13 +4,14 @@
 mod common;
 
 use common::cli::{assert_refused, manylights_env, BAD_INPUT};
-use common::compare::cpu_shaded;
+use common::compare::{assert_techniques_match, cpu_shaded};
 use common::pixels::{channel_diff, worst_channel};
 use common::render::{render_error, settings};
 use common::temp::TempDir;
 use glam::Vec3;
 use host::render::cpu_shading::{shade, Shadows};
-use host::render::shadow_maps::{ShadowFilter, ShadowSettings};
+use host::render::clustered::UniqueClusters;
+use host::render::shadow_maps::{ShadowFilter, ShadowSettings, ShadowStats};
 use host::render::{self, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
@@ -132,9 +133,9 @@ fn without_casters_the_reference_is_the_plain_shading() {
 }
 
 /// The frame of `scene` rendered by `deferred` with its shadows (read back), the CPU's ray-cast
-/// reference shaded from that frame's own G-buffer, and the ray-cast visibility of light 0 per
-/// pixel (`None`: background).
-fn shadowed_and_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSettings) -> (render::Frame, Vec<u32>, Vec<Option<bool>>) {
+/// reference shaded from that frame's own G-buffer, and per pixel the ray-cast visibility of
+/// the first 64 shadow-casting lights as bits (`None`: background).
+fn shadowed_and_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSettings) -> (render::Frame, Vec<u32>, Vec<Option<u64>>) {
     let s = Settings { read_back: true, shadow, ..settings(160, 120, Technique::Deferred) };
     let flat = flatten(scene, s.normal_precision).unwrap();
     let input = scene_input(scene, &flat, &scene.lights);
@@ -143,13 +144,14 @@ fn shadowed_and_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSet
     let reference = shade(scene, &f, &s, Some(&shadows)).unwrap();
     let rb = f.readback.as_ref().unwrap();
     let g = &f.grid;
-    let light = Vec3::from_array(rb.lights_view[0].position);
+    let casters: Vec<usize> = (0..scene.lights.len()).filter(|&l| scene.shadows.get(l) == Some(&true)).take(64).collect();
     let visible = (0..rb.depth.len())
         .map(|i| {
             let depth = f32::from_bits(rb.depth[i]);
             (!is_background(depth)).then(|| {
                 let p = view_position(g, i as u32 % g.width, i as u32 / g.width, distance_from_depth(g.near, depth));
-                shadows.lit(0, p, Vec3::from_array(rb.normals[i]), light)
+                let n = Vec3::from_array(rb.normals[i]);
+                casters.iter().enumerate().fold(0u64, |bits, (k, &l)| bits | (u64::from(shadows.lit(l, p, n, Vec3::from_array(rb.lights_view[l].position))) << k))
             })
         })
         .collect();
@@ -158,7 +160,7 @@ fn shadowed_and_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSet
 
 /// Surface pixels at most `band` pixels (in x and y) from a surface pixel whose visibility differs: the edge band
 /// where a shadow map of finite resolution may disagree with exact visibility.
-fn edge_band(visible: &[Option<bool>], width: usize, band: usize) -> Vec<bool> {
+fn edge_band(visible: &[Option<u64>], width: usize, band: usize) -> Vec<bool> {
     let height = visible.len() / width;
     (0..visible.len())
         .map(|i| {
@@ -175,13 +177,14 @@ fn edge_band(visible: &[Option<bool>], width: usize, band: usize) -> Vec<bool> {
 const EDGE_BAND_PX: usize = 2;
 
 /// `deferred` with `shadow` against the ray-cast reference: every pixel outside the edge band
-/// within 1/255, the band a thin outline (both printed). Returns the shadowed pixels.
-fn assert_matches_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSettings, what: &str) -> usize {
+/// within 1/255, the band a thin outline (both printed). Returns the pixels the first caster
+/// leaves in shadow.
+fn assert_matches_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowSettings, what: &str) -> (usize, ShadowStats) {
     let (f, reference, visible) = shadowed_and_reference(gpu, scene, shadow);
     let band = edge_band(&visible, f.grid.width as usize, EDGE_BAND_PX);
     let (mut shadowed, mut in_band, mut off_in_band) = (0, 0, 0);
     for i in 0..reference.len() {
-        shadowed += usize::from(visible[i] == Some(false));
+        shadowed += usize::from(visible[i].is_some_and(|v| v & 1 == 0));
         let off = channel_diff(f.pixels[i], reference[i]) > 1;
         if band[i] {
             in_band += 1;
@@ -194,7 +197,7 @@ fn assert_matches_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowS
     eprintln!("{what}: {shadowed} shadowed pixels; edge band {in_band} pixels ({:.2} %), {off_in_band} of them off by more than 1/255", 100.0 * share);
     // The band stays a thin outline (the test would hold nothing back were it the image).
     assert!(share < 0.1, "{what}: the edge band holds {:.1} % of the image", 100.0 * share);
-    shadowed
+    (shadowed, f.shadows.expect("the frame made shadow maps"))
 }
 
 /// `deferred` with cube shadow maps against the ray-cast reference on the floor behind a wall, at
@@ -205,7 +208,7 @@ fn deferred_shadow_maps_match_the_ray_cast_reference() {
     let dir = TempDir::new("shadow-maps");
     let scene = scene(&dir, "shadows = true\n");
     for filter in [ShadowFilter::Nearest, ShadowFilter::Bilinear] {
-        let shadowed = assert_matches_reference(&gpu, &scene, ShadowSettings { filter, ..Default::default() }, &format!("{filter:?}"));
+        let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings { filter, ..Default::default() }, &format!("{filter:?}"));
         assert!(shadowed > 3000, "{shadowed} pixels in shadow");
     }
     common::assert_clean(&gpu);
@@ -230,9 +233,68 @@ fn hard_cases_match_the_ray_cast_reference() {
     ];
     for (what, obj, light, min_shadowed) in cases {
         let scene = scene_of(&dir, &obj, &description_at(light, "shadows = true\n"));
-        let shadowed = assert_matches_reference(&gpu, &scene, ShadowSettings::default(), what);
+        let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings::default(), what);
         assert!(shadowed >= min_shadowed, "{what}: {shadowed} pixels in shadow");
     }
+    common::assert_clean(&gpu);
+}
+
+/// Many batches and small lights: the per-face cull sends each caster only the batches near it
+/// (at most a quarter of the batch-face pairs here; printed), and the frame still matches the
+/// ray-cast reference on the city, 12 of 200 lights casting shadows.
+#[test]
+fn culled_shadow_maps_match_the_reference_on_the_city() {
+    let gpu = common::gpu();
+    let mut scene = common::render::city();
+    scene.lights = host::scene::lights::uniform(&scene, 200, 7).unwrap();
+    scene.spots.clear();
+    scene.shadows = host::scene::lights::shadow_casters(200, 0.0625).unwrap();
+    assert_eq!(scene.shadow_casters(), 12);
+    let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings::default(), "city");
+    let tested = sh.batches as u64 * 6 * sh.casters as u64;
+    eprintln!("city: {} batches, {} of {tested} batch-face pairs drawn", sh.batches, sh.entries);
+    assert!(sh.batches > 20 && sh.entries > 0 && (sh.entries as u64) * 4 < tested, "{sh:?}");
+    common::assert_clean(&gpu);
+}
+
+/// Every technique that renders shadows equals `deferred` with shadows within 1/255 on the wall
+/// scene and on the city with 12 of 200 lights casting (both unique-cluster paths of the
+/// clustered techniques, with read-back lists checked against the CPU).
+#[test]
+fn techniques_with_shadows_equal_deferred() {
+    let gpu = common::gpu();
+    let dir = TempDir::new("shadow-techniques");
+    let wall = scene(&dir, "shadows = true\n");
+    let mut city = common::render::city();
+    city.lights = host::scene::lights::uniform(&city, 200, 7).unwrap();
+    city.spots.clear();
+    city.shadows = host::scene::lights::shadow_casters(200, 0.0625).unwrap();
+    let with: Vec<Technique> = Technique::ALL.iter().copied().filter(|&t| t != Technique::Deferred && t.description().shadows).collect();
+    assert!(!with.is_empty());
+    for (what, scene) in [("wall", &wall), ("city", &city)] {
+        for unique_clusters in [UniqueClusters::Tiles, UniqueClusters::PageTable] {
+            let s = Settings { read_back: true, unique_clusters, ..settings(160, 120, Technique::Deferred) };
+            let reference = common::render::frame(&gpu, scene, &scene.lights, &s);
+            assert!(reference.shadows.is_some());
+            assert_techniques_match(&gpu, &reference.pixels, scene, &scene.lights, &s, &with, &format!("{what} ({} clusters)", unique_clusters.name()));
+        }
+    }
+}
+
+/// Maps that would pass the device's largest storage binding at the requested resolution are
+/// drawn at the largest halving that fits, said in the frame's statistics, and still match the
+/// reference: one caster more than fit at 1024² per face.
+#[test]
+fn maps_past_the_largest_binding_degrade_their_resolution() {
+    let gpu = common::gpu();
+    let per_caster = 6 * 4 * 1024 * 1024u64;
+    let n = (gpu.ctx.info.max_storage_buffer_range as u64 / per_caster + 1) as usize;
+    let lights: String = (0..n).map(|i| format!("[[light]]\nposition = [-2, 1, {}]\nradius = 30\nintensity = {}\nshadows = true\n", -3.0 + 6.0 * i as f32 / n as f32, 60.0 / n as f32)).collect();
+    let dir = TempDir::new("shadow-degrade");
+    let base = description_at([-2.0, 1.0, 0.0], "shadows = true\n");
+    let scene = scene_of(&dir, FLOOR_AND_WALL, &format!("{base}{lights}"));
+    let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings { resolution: 1024, ..Default::default() }, "degraded");
+    assert_eq!((sh.casters, sh.resolution, sh.degraded_from), (n + 1, 512, Some(1024)), "{sh:?}");
     common::assert_clean(&gpu);
 }
 
@@ -335,6 +397,6 @@ fn render_draws_shadows_or_refuses_them() {
     };
     let r = generated("deferred", "0.25");
     assert!(r.ok, "{}", r.stderr);
-    assert_refused(&generated("clustered-bvh", "0.25"), "generated shadow casters", BAD_INPUT, &["10 of 40 lights cast shadows"]);
+    assert_refused(&generated("tiled", "0.25"), "generated shadow casters", BAD_INPUT, &["10 of 40 lights cast shadows"]);
     assert_refused(&generated("deferred", "2"), "a fraction above 1", BAD_INPUT, &["not in [0, 1]"]);
 }

@@ -268,6 +268,11 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     if frame.light_moved > 0.01 * smallest {
         eprintln!("warning: compact light records move lights by up to {:.3e} (the smallest light radius is {smallest:.3e}): the lights span a large box; --light-record full keeps them exact", frame.light_moved);
     }
+    if let Some(sh) = frame.shadows {
+        if let Some(requested) = sh.degraded_from {
+            eprintln!("warning: {} shadow-casting lights at {requested}² texels per face pass the device's largest storage binding: drawn at {}²", sh.casters, sh.resolution);
+        }
+    }
     if a.shadow_reference {
         let start = std::time::Instant::now();
         let shadows = render::cpu_shading::Shadows::of_scene(&scene, &input.view);

@@ -434,12 +434,15 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 14)] shadow_maps: &[u32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = slot_rank[page_table::slot_index(page_base[page_table::page_of(key) as usize], key) as usize] as usize;
         let cluster_list = shading::list_range(list, offsets[cluster], counts[cluster]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
+        let shadows = crate::shadow::CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list, &shadows);
     }
 }
 
@@ -575,6 +578,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] counters: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] args: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 14)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 15)] shadow_maps: &[u32],
     ) {
         if wg.x == 0 && wg.y == 0 && local == 0 {
             tile_clusters::hand_over_counters(counters, args);
@@ -583,6 +588,7 @@ specular_entries! {
         let Some((i, key)) = keyed_pixel(p, wg, local, keys, frame) else { return };
         let cluster = tile_clusters::cluster_of_key(&p.grid, records, key) as usize;
         let cluster_list = shading::list_range(list, offsets[cluster], counts[cluster]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
+        let shadows = crate::shadow::CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list, &shadows);
     }
 }

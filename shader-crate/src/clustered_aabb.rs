@@ -317,7 +317,7 @@ specular_entries! {
             return;
         }
         let cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list, &crate::shadow::NoShadows);
     }
 }
 

@@ -76,14 +76,14 @@ pub const COMPACT_PAGE_SLOTS: Kernel<()> = Kernel::new("clustered::compact_page_
 pub const STORE_SLOTS: Kernel<FrameParams> = linear("clustered::store_slots", 3);
 pub const CLUSTER_LIGHT_COUNTS: Kernel<FrameParams> = linear("clustered::cluster_light_counts", 6);
 pub const CLUSTER_LIGHT_FILL: Kernel<FrameParams> = linear("clustered::cluster_light_fill", 6);
-pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 13);
-pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_specular", 13);
+pub const SHADE_CLUSTERED_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_diffuse", 15);
+pub const SHADE_CLUSTERED_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_specular", 15);
 /// The tile path of the unique clusters (`tile_clusters`): one workgroup per tile, and the
 /// shading that looks clusters up in the tiles' records.
 pub const TILE_CLUSTERS: Kernel<TileClusterParams> =
     Kernel::new("clustered::tile_clusters", 7, [crate::tile_clusters::TILE_WORKGROUP, 1, 1], true);
-pub const SHADE_CLUSTERED_TILES_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_diffuse", 14);
-pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_specular", 14);
+pub const SHADE_CLUSTERED_TILES_DIFFUSE: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_diffuse", 16);
+pub const SHADE_CLUSTERED_TILES_SPECULAR: Kernel<FrameParams> = linear("clustered::shade_clustered_tiles_specular", 16);
 /// The MSAA edge passes (`msaa.rs` step 5) of the page-table and tile paths: the shading's
 /// buffers (without the tile path's counters and dispatch) and the edge list.
 pub const SHADE_EDGES_CLUSTERED: [Kernel<FrameParams>; 2] =
@@ -250,6 +250,8 @@ pub const ALL: &[Kernel<()>] = &[
     BITONIC_BLOCK_SORT.erased(),
     BITONIC_SPLITTERS.erased(),
     BITONIC_MERGE.erased(),
+    crate::shadow_cull::handles::SHADOW_CULL.erased(),
+    crate::shadow_cull::handles::SHADOW_DRAW_ARGS.erased(),
 ];
 
 /// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds
@@ -403,7 +405,7 @@ pub const TRANSPARENT_WEIGHTED: [[RasterKernel<TransparentParams>; 3]; 2] = [
 ];
 
 /// Every vertex entry point of the raster module (from the handles above).
-pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex, crate::shadow::handles::SHADOW_DISTANCES.vertex];
+pub const VERTEX_ENTRIES: &[&str] = &[GBUFFER[0].vertex, GBUFFER[1].vertex, FORWARD_DEPTH[0].vertex, FORWARD_DEPTH[1].vertex, crate::shadow_cull::handles::SHADOW_BATCHES.vertex];
 /// Every fragment entry point of the raster module (from the handles above).
 pub const FRAGMENT_ENTRIES: &[&str] = &[
     GBUFFER[0].fragment,
@@ -444,5 +446,5 @@ pub const FRAGMENT_ENTRIES: &[&str] = &[
     TRANSPARENT_WEIGHTED[1][0].fragment,
     TRANSPARENT_WEIGHTED[1][1].fragment,
     TRANSPARENT_WEIGHTED[1][2].fragment,
-    crate::shadow::handles::SHADOW_DISTANCES.fragment,
+    crate::shadow_cull::handles::SHADOW_BATCHES.fragment,
 ];

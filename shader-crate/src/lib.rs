@@ -36,7 +36,8 @@
 //!   pure tests also serve raster passes).
 //! * [`fragment_atomics`] — atomics on storage-buffer words from fragment shaders.
 //! * [`shadow`] — cube shadow maps: the raster pass that fills them and the per-light lookup
-//!   of the shading loop.
+//!   of the shading loop; [`shadow_cull`] — the batches of triangles culled per face that the
+//!   raster pass draws.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -129,6 +130,7 @@ pub mod reconstruct;
 pub mod scan;
 pub mod shading;
 pub mod shadow;
+pub mod shadow_cull;
 pub mod spot;
 #[cfg(test)]
 mod sort_acceptance_tests;

@@ -478,7 +478,7 @@ fn shade_directional_record<const SPECULAR: bool>(s: &Surface, effects: u32, d: 
 /// pixel's list.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightList>(
+pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightList, S: Shadowing>(
     p: &FrameParams,
     bounds: &[f32],
     i: u32,
@@ -488,10 +488,11 @@ pub fn shade_gbuffer_pixel<const SPECULAR: bool, L: LightList>(
     materials: &[MaterialGpu],
     lights: &[PointLight],
     list: &L,
+    shadows: &S,
 ) -> u32 {
     let surface = fetch_surface(p, i, depth[i as usize], normals, albedo[i as usize], materials);
     let mut sum = Vec3::ZERO;
-    let count = shade_lights::<SPECULAR, true, L>(&surface, p.effects, p.num_lights, lights, list, &mut sum);
+    let count = shade_lights_with::<SPECULAR, true, L, S>(&surface, p.effects, p.num_lights, lights, list, shadows, &mut sum);
     shade_directional_lights::<SPECULAR>(&surface, p.effects, p.num_lights, lights, &mut sum);
     output_colour(p, bounds, i, &surface, sum, count)
 }

@@ -3,12 +3,12 @@
 //!
 //! Steps (host: `render/shadow_maps.rs`):
 //! 1. **Clear** every texel to [`NO_OCCLUDER`].
-//! 2. **Raster** ([`shadow_face_vs`] + [`shadow_distance_fs`]): the scene's opaque draws,
-//!    instanced `FACES × casters` times; instance `k` draws face `k % 6` of caster `k / 6`
-//!    ([`face_clip`]) into a `res × res` viewport, and each fragment keeps the distance from the
-//!    light to its surface point with an atomic minimum on the float's bits (non-negative floats
-//!    order as their bit patterns). No depth target is tested: the minimum is the depth test, and
-//!    one draw fills every face of every caster.
+//! 2. **Raster** (`shadow_cull`: batches of the scene's opaque triangles culled per face on the
+//!    GPU, then one indirect draw; fragments in [`shadow_distance_fs`]): each batch drawn into a
+//!    face `f` of a caster ([`face_clip`]) in a `res × res` viewport, and each fragment keeps the
+//!    distance from the light to its surface point with an atomic minimum on the float's bits
+//!    (non-negative floats order as their bit patterns). No depth target is tested: the minimum
+//!    is the depth test, and one draw fills every face of every caster.
 //! 3. **Lookup** ([`CubeShadows::visibility`], in the shading loop of every technique that
 //!    renders shadows, `shading::shade_lights_with`): the receiver's face and texel, its distance
 //!    compared with the stored one, one texel or the bilinear weights of four
@@ -213,32 +213,6 @@ pub struct ShadowParams {
 }
 const _: () = assert!(core::mem::size_of::<ShadowParams>() == 16);
 
-/// Step 2, vertex stage: vertex `vertex_index` of the scene seen from caster `instance / 6`
-/// through face `instance % 6`.
-#[cfg(feature = "graphics")]
-#[spirv(vertex)]
-#[allow(clippy::too_many_arguments)]
-pub fn shadow_face_vs(
-    #[spirv(vertex_index)] vertex_index: i32,
-    #[spirv(instance_index)] instance: u32,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] camera: &crate::layout::RasterCamera,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] casters: &[f32],
-    #[spirv(position)] out_position: &mut Vec4,
-    out_offset: &mut Vec3,
-    #[spirv(flat)] out_map: &mut u32,
-    #[spirv(flat)] out_radius: &mut f32,
-) {
-    let view = glam::Mat4::from_cols_array_2d(&camera.view);
-    let p = (view * crate::raster::fetch3(positions, vertex_index as usize).extend(1.0)).truncate();
-    let c = (instance / FACES * CASTER_WORDS) as usize;
-    let d = p - Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
-    *out_position = face_clip(d, instance % FACES);
-    *out_offset = d;
-    *out_map = instance;
-    *out_radius = casters[c + 3];
-}
-
 /// Step 2, fragment stage: keeps the nearest distance of face map `map` at texel `⌊frag.xy⌋`
 /// (within the caster's radius).
 #[cfg(feature = "graphics")]
@@ -249,23 +223,13 @@ pub fn shadow_distance_fs(
     #[spirv(flat)] in_map: u32,
     #[spirv(flat)] in_radius: f32,
     #[spirv(push_constant)] p: &ShadowParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] maps: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] maps: &mut [u32],
 ) {
     let distance = in_offset.length();
     if distance <= in_radius {
         let texel = (in_map * p.res + frag.y as u32) * p.res + frag.x as u32;
         crate::fragment_atomics::atomic_min(&mut maps[texel as usize], distance.to_bits());
     }
-}
-
-/// Typed handles of the raster pass (host side).
-#[cfg(not(target_arch = "spirv"))]
-pub mod handles {
-    use super::ShadowParams;
-    use crate::kernels::RasterKernel;
-
-    /// Positions, camera, caster records (vertex stage); maps (fragment stage).
-    pub const SHADOW_DISTANCES: RasterKernel<ShadowParams> = RasterKernel::with_vertex_buffers("shadow::shadow_face_vs", "shadow::shadow_distance_fs", 3, 1, 0);
 }
 
 #[cfg(test)]

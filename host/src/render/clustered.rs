@@ -78,7 +78,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
-    shadows: false,
+    shadows: true,
 };
 
 pub const CLUSTERED_BVH: Description = Description {
@@ -448,12 +448,12 @@ impl ClusterBuffers {
         let t = match &self.path {
             UniqueBuffers::Tiles { records } => {
                 // Also hands the cluster count over and zeroes the tile path's atomics.
-                let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, records]).chain(lists).chain([&self.counters, &self.dispatch_args]).collect();
+                let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, records]).chain(lists).chain([&self.counters, &self.dispatch_args]).chain(f.shadow_buffers()).collect();
                 return rec.pass("shading", |rec| rec.dispatch_blocks(super::shading_pipeline(&k.shade_clustered_tiles, p)?, &buffers, p, w, h));
             }
             UniqueBuffers::PageTable(t) => t,
         };
-        let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, &t.page_base, &t.slot_rank]).chain(lists).collect();
+        let buffers: Vec<&Buffer> = gbuffer.into_iter().chain([&self.keys, &t.page_base, &t.slot_rank]).chain(lists).chain(f.shadow_buffers()).collect();
         rec.pass("shading", |rec| rec.dispatch_blocks(super::shading_pipeline(&k.shade_clustered, p)?, &buffers, p, w, h))?;
         let Some(tr) = transparency else { return Ok(()) };
         let c = ClusterInputs {

@@ -275,8 +275,8 @@ pub struct Frame {
     /// The farthest a light moved in the light buffer's records (view space; 0 for full records,
     /// at most half a grid step's diagonal for compact ones: `light_record::light_buffer`).
     pub light_moved: f32,
-    /// Lights that cast shadows through the frame's shadow maps (0: none were made).
-    pub shadow_casters: usize,
+    /// The frame's shadow maps (`None`: no light casts shadows, none were made).
+    pub shadows: Option<shadow_maps::ShadowStats>,
 }
 
 impl Frame {

@@ -138,6 +138,7 @@ pub fn check_shadow_scene(scene: &SceneInput<'_>, s: &Settings) -> Result<()> {
         bail!("{}", no_shadows(s.technique, casters, n));
     }
     super::shadow_maps::check_resolution(s.shadow.resolution)?;
+    super::shadow_maps::check_casters(casters)?;
     if s.msaa > 1 {
         bail!("--msaa {}: {casters} of {n} lights cast shadows, and shadows are shaded once per pixel: render them at --msaa 1", s.msaa);
     }
@@ -237,7 +238,7 @@ impl Renderer {
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
         let frame = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
-        let shadows = ShadowMaps::new(ctx, &gpu.graphics_module, scene.shadows, &lights_view, s.shadow)?;
+        let shadows = ShadowMaps::new(gpu, &positions, &indices, &geometry.draws, scene.view.rotation(), scene.shadows, &lights_view, s.shadow)?;
         let shadow_effect = if shadows.is_some() { light_types_bits::EFFECT_SHADOWS } else { 0 };
         let params = FrameParams {
             grid,
@@ -352,6 +353,9 @@ impl Renderer {
         passes.extend(main_passes);
         let raster_ms = passes.iter().filter(|p| p.raster && p.queue == Queue::Main).map(|p| p.ms).sum();
         let sample = frame_time::sample(main_span, async_span, gpu.ctx.info.timestamps_across_queues, raster_ms);
+        if let Some(sh) = &mut self.res.shadows {
+            sh.check_entries()?;
+        }
         Ok(FrameTimes { passes, sample })
     }
 
@@ -360,12 +364,16 @@ impl Renderer {
     pub fn set_view(&mut self, gpu: &Gpu, view: ViewTransform, world_positions: &[[f32; 3]], world_lights: &[PointLight]) -> Result<()> {
         let r = &mut self.res;
         r.view = view;
-        r.geometry.positions.write(&view.relative_positions(world_positions)).context("uploading vertices")?;
+        let relative = view.relative_positions(world_positions);
+        r.geometry.positions.write(&relative).context("uploading vertices")?;
         if let Some(t) = &mut r.tessellation {
             t.set_eye(view.eye).context("uploading the NURBS control points")?;
         }
         let aspect = r.settings.width as f32 / r.settings.height as f32;
         r.camera.write(&[gbuffer::raster_camera(view.rotation(), r.fov_y_radians, aspect, r.near)])?;
+        if let Some(sh) = &mut r.shadows {
+            sh.view_moved(&relative, &r.indices, &r.geometry.draws, view.rotation())?;
+        }
         let spots = r.spots.clone();
         self.set_lights(gpu, world_lights, &spots)
     }
@@ -384,7 +392,7 @@ impl Renderer {
                 let n = self.res.lights_view.len();
                 bail!("{} lights in place of {}: the scene's lights cast shadows, and their flags are per light", lights_view.len(), n);
             }
-            sh.lights_moved(&lights_view)?;
+            sh.lights_moved(&gpu.ctx, &lights_view)?;
         }
         if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;
@@ -539,7 +547,7 @@ fn finish(res: &mut Resources, r: TechReport, times: &[FrameTimes], regrowths: u
         },
         samples: res.grid.samples,
         light_moved: res.light_moved,
-        shadow_casters: res.shadows.as_ref().map_or(0, |m| m.casters()),
+        shadows: res.shadows.as_ref().map(|m| m.stats()),
         bytes_per_sample: r.msaa_bytes_per_sample.unwrap_or_else(|| super::msaa::bytes_per_sample(res.settings.normal_precision)),
         edge_pixels: match (&mut res.msaa, r.msaa_edge_pixels) {
             (_, Some(n)) => n,

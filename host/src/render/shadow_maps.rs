@@ -1,22 +1,39 @@
-//! Cube shadow maps for the lights that cast shadows (steps, face layout, bias rule and memory:
-//! `shaders::shadow`). Made only for scenes with such lights; the frame records one raster pass
-//! ("shadow maps") after the G-buffer: the maps cleared, then the scene's opaque draws instanced
-//! six times per shadow-casting light. Techniques that render shadows bind [`ShadowMaps::slots`]
-//! and [`ShadowMaps::maps`] beside their lights (`FrameInputs::shadow_buffers`).
+//! Cube shadow maps for the lights that cast shadows (face layout, bias rule and memory:
+//! `shaders::shadow`; batches and per-face culling: `shaders::shadow_cull`). Made only for scenes
+//! with such lights; the frame records one pass ("shadow maps") after the G-buffer:
 //!
-//! Every shadow-casting light gets a full map at [`ShadowSettings::resolution`]: this is the
-//! plain form of the virtual cube shadow maps of Olsson et al. (no per-face culling, no page
-//! table), the reference their resolution choices are measured against.
-use super::gbuffer::Geometry;
-use crate::vk::{Attachment, Binding, Buffer, Context, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
+//! 1. the maps cleared to "no occluder" and the draw's arguments to zero;
+//! 2. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
+//!    an entry per face its bounding sphere meets within the light's radius;
+//! 3. the arguments kernel, then one indirect draw of every entry's triangles into its face.
+//!
+//! Techniques that render shadows bind [`ShadowMaps::slots`] and [`ShadowMaps::maps`] beside
+//! their lights (`FrameInputs::shadow_buffers`).
+//!
+//! Every shadow-casting light gets a whole map at [`ShadowSettings::resolution`]: Olsson et al.'s
+//! virtual cube shadow maps without their page table (no per-face resolution choice). Where the
+//! maps would pass the device's largest storage binding, the resolution halves until they fit,
+//! and `--stats` and `render` say so ([`ShadowStats::degraded_from`]); no caster is dropped.
+//!
+//! Memory: the maps (`shaders::shadow`), 32 B per batch (0.5 B per triangle), 8 B per entry
+//! (counted on the host when the lights or the camera move: [`count_entries`]), 16 B per caster.
+use super::gbuffer::{Draw, Geometry};
+use crate::gpu::Gpu;
+use crate::vk::{Attachment, Binding, Buffer, ComputePipeline, Context, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
 use anyhow::{bail, Context as _, Result};
+use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
-use shaders::shadow::{caster_record, handles, ShadowParams, FACES, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow::{caster_record, ShadowParams, FACES, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
 
 /// Texels per face side unless `--shadow-resolution` says otherwise.
 pub const DEFAULT_RESOLUTION: u32 = 256;
 /// The largest face side accepted.
 pub const MAX_RESOLUTION: u32 = 4096;
+/// The most shadow-casting lights: the cull dispatches one row of workgroups per caster.
+pub const MAX_CASTERS: usize = shaders::indirect::MAX_GROUPS_PER_AXIS as usize;
+/// The smallest face side the maps degrade to where the requested one does not fit.
+pub const MIN_DEGRADED_RESOLUTION: u32 = 8;
 
 /// How the lookup filters (`--shadow-filter`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -59,16 +76,56 @@ pub fn check_resolution(res: u32) -> Result<()> {
     Ok(())
 }
 
+/// What `--stats` reports of the shadow maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShadowStats {
+    pub casters: usize,
+    /// Texels per face side drawn, and the requested side where that had to be lower.
+    pub resolution: u32,
+    pub degraded_from: Option<u32>,
+    /// Batches of triangles the batches' cull sent to faces in the last frame, and the triangles
+    /// of the scene's opaque draws per face at most (batches × 64 × 6 per caster).
+    pub entries: u32,
+    pub batches: usize,
+}
+
+/// Checks the number of shadow-casting lights against [`MAX_CASTERS`].
+pub fn check_casters(casters: usize) -> Result<()> {
+    if casters > MAX_CASTERS {
+        bail!("{casters} lights cast shadows: the shadow maps take at most {MAX_CASTERS}");
+    }
+    Ok(())
+}
+
 /// The frame's cube shadow maps.
 pub struct ShadowMaps {
+    cull: ComputePipeline<ShadowCullParams>,
+    args_pipe: ComputePipeline<ShadowCullParams>,
     pipe: GraphicsPipeline<ShadowParams>,
+    /// The resolution drawn (the requested one, or lower where it did not fit) and the filter.
     settings: ShadowSettings,
+    /// The requested resolution where the maps had to drop below it.
+    degraded_from: Option<u32>,
     /// Light index of each caster, in slot order.
     casters: Vec<u32>,
     /// `[res, filter, 0, 0]`, then each light's slot or `NO_SHADOW`.
     pub slots: Buffer,
-    /// Each caster's view-space position and radius (the raster pass's vertex stage).
+    /// Each caster's view-space position and radius (cull and raster).
     records: Buffer,
+    records_cpu: Vec<[f32; 4]>,
+    /// The batches (`shaders::shadow_cull::BATCH_WORDS` each) and their spheres on the host, in
+    /// the position buffer's space (relative to the eye).
+    batches: Buffer,
+    spheres: Vec<[f32; 4]>,
+    /// The view's rotation (position-buffer space → view space).
+    rotation: Mat4,
+    /// Entries of the last count, and their buffer.
+    capacity: u32,
+    /// Entries the last frame's cull counted.
+    counted: u32,
+    entries: Buffer,
+    /// The indirect draw's arguments and the entries counted (`shaders::shadow_cull::ARGS_WORDS`).
+    args: Buffer,
     /// Slot-major, face-major, row-major distances.
     pub maps: Buffer,
     /// The raster pass's render area (`res × res`, never tested or written).
@@ -76,9 +133,12 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    /// The maps of the lights `casters` marks (one flag per light of `lights_view`); `None`
-    /// where none casts shadows (nothing is made).
-    pub fn new(ctx: &Context, module: &crate::vk::ShaderModule, casters: &[bool], lights_view: &[PointLight], settings: ShadowSettings) -> Result<Option<Self>> {
+    /// The maps of the lights `casters` marks (one flag per light of `lights_view`), drawing the
+    /// opaque `draws` of `indices` over `positions` (the position buffer's contents; `rotation`
+    /// takes them to view space); `None` where no light casts shadows (nothing is made).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(gpu: &Gpu, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4, casters: &[bool], lights_view: &[PointLight], settings: ShadowSettings) -> Result<Option<Self>> {
+        let ctx = &gpu.ctx;
         check_resolution(settings.resolution)?;
         let list: Vec<u32> = casters.iter().enumerate().filter(|(_, &c)| c).map(|(i, _)| i as u32).collect();
         if list.is_empty() {
@@ -87,32 +147,78 @@ impl ShadowMaps {
         if casters.len() != lights_view.len() {
             bail!("{} shadow flags for {} lights", casters.len(), lights_view.len());
         }
-        let res = settings.resolution as u64;
-        let bytes = 4 * FACES as u64 * res * res * list.len() as u64;
-        crate::vk::memory::check_range(ctx, "shadow maps", bytes).with_context(|| format!("{} shadow-casting lights at {res}² texels per face: lower --shadow-resolution", list.len()))?;
+        check_casters(list.len())?;
+        let (resolution, bytes) = fitting_resolution(ctx, settings.resolution, list.len())?;
+        let degraded_from = (resolution != settings.resolution).then_some(settings.resolution);
+        let settings = ShadowSettings { resolution, ..settings };
         let mut slots = vec![settings.resolution, settings.filter.code(), 0, 0];
         slots.extend(std::iter::repeat_n(NO_SHADOW, lights_view.len()));
         for (slot, &l) in list.iter().enumerate() {
             slots[(SHADOW_HEADER_WORDS + l) as usize] = slot as u32;
         }
+        let (batch_words, spheres) = batches(positions, indices, draws);
+        let records_cpu = records(&list, lights_view);
+        let capacity = entry_capacity(ctx, &spheres, rotation, &records_cpu)?;
         let maps = Self {
-            pipe: GraphicsPipeline::new(ctx, module, "shadow maps", handles::SHADOW_DISTANCES, &[], crate::vk::DepthTest::Off)?,
+            cull: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_CULL)?,
+            args_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_DRAW_ARGS)?,
+            pipe: GraphicsPipeline::new(ctx, &gpu.graphics_module, "shadow maps", handles::SHADOW_BATCHES, &[], crate::vk::DepthTest::Off)?,
             settings,
-            records: Buffer::from_slice(ctx, "shadow caster records", &records(&list, lights_view))?,
+            degraded_from,
+            records: Buffer::from_slice(ctx, "shadow caster records", &records_cpu)?,
+            records_cpu,
             casters: list,
             slots: Buffer::from_slice(ctx, "shadow slots", &slots)?,
+            batches: Buffer::from_slice(ctx, "shadow batches", &batch_words)?,
+            spheres,
+            rotation,
+            capacity,
+            counted: 0,
+            entries: entry_buffer(ctx, capacity)?,
+            args: Buffer::storage(ctx, "shadow draw arguments", 4 * ARGS_WORDS as u64)?,
             maps: Buffer::storage(ctx, "shadow maps", bytes).context("allocating the shadow maps")?,
             area: Image::target(ctx, "shadow map area", settings.resolution, settings.resolution, TargetFormat::Depth32)?,
         };
         Ok(Some(maps))
     }
 
-    /// Uploads the casters' records anew (the lights or the camera moved).
-    pub fn lights_moved(&mut self, lights_view: &[PointLight]) -> Result<()> {
+    /// Uploads the casters' records anew (the lights or the camera moved) and grows the entries
+    /// to the new count where it passed them.
+    pub fn lights_moved(&mut self, ctx: &Context, lights_view: &[PointLight]) -> Result<()> {
         if let Some(&l) = self.casters.iter().find(|&&l| l as usize >= lights_view.len()) {
             bail!("shadow-casting light {l} is past the {} lights of the frame", lights_view.len());
         }
-        self.records.write(&records(&self.casters, lights_view)).context("uploading the shadow casters")?;
+        self.records_cpu = records(&self.casters, lights_view);
+        self.records.write(&self.records_cpu).context("uploading the shadow casters")?;
+        self.recount(ctx)
+    }
+
+    /// The position buffer's contents moved (the eye moved) and the view turned: the batches'
+    /// spheres anew. The caller moves the lights next ([`ShadowMaps::lights_moved`]).
+    pub fn view_moved(&mut self, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4) -> Result<()> {
+        let (words, spheres) = batches(positions, indices, draws);
+        self.batches.write(&words).context("uploading the shadow batches")?;
+        (self.spheres, self.rotation) = (spheres, rotation);
+        Ok(())
+    }
+
+    fn recount(&mut self, ctx: &Context) -> Result<()> {
+        let capacity = entry_capacity(ctx, &self.spheres, self.rotation, &self.records_cpu)?;
+        if capacity > self.capacity {
+            self.entries = entry_buffer(ctx, capacity)?;
+            self.capacity = capacity;
+        }
+        Ok(())
+    }
+
+    /// Fails where the last frame's cull counted more entries than it could write (which the
+    /// host's widened count rules out): triangles would be missing from the maps.
+    pub fn check_entries(&mut self) -> Result<()> {
+        let args: Vec<u32> = self.args.read(ARGS_WORDS as usize)?;
+        self.counted = args[ARGS_COUNTED];
+        if args[ARGS_COUNTED] > self.capacity {
+            bail!("the shadow cull counted {} entries against the {} the host counted: shadow-map triangles would be missing", args[ARGS_COUNTED], self.capacity);
+        }
         Ok(())
     }
 
@@ -121,22 +227,31 @@ impl ShadowMaps {
         self.casters.len()
     }
 
+    /// The settings drawn (the resolution possibly below the requested one).
     pub fn settings(&self) -> ShadowSettings {
         self.settings
     }
 
-    /// Records the pass: clear, then every opaque draw once per face of every caster.
+    /// What `--stats` reports.
+    pub fn stats(&self) -> ShadowStats {
+        ShadowStats { casters: self.casters.len(), resolution: self.settings.resolution, degraded_from: self.degraded_from, entries: self.counted, batches: self.spheres.len() }
+    }
+
+    /// Records the pass: clear, cull, arguments, then one indirect draw of every entry.
     pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry, camera: &Buffer) -> VkResult<()> {
         rec.fill(&self.maps, NO_OCCLUDER);
+        rec.fill(&self.args, 0);
+        let batches = self.spheres.len() as u32;
+        let p = ShadowCullParams { batches, casters: self.casters.len() as u32, capacity: self.capacity, pad: 0 };
+        rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
+        rec.dispatch(&self.args_pipe, &[&self.args], &p, [1, 1, 1])?;
+        rec.draws_read_kernel_writes();
         rec.fragments_read_earlier_writes();
         rec.transition(&self.area, ImageUse::Undefined, ImageUse::DepthTarget);
-        rec.begin_rendering(&[], Attachment { image: &self.area, load: Load::ClearDepth(0.0) }, &geometry.indices);
-        let bindings = [&geometry.positions, camera, &self.records, &self.maps].map(Binding::Buffer);
+        rec.begin_drawing(&[], Attachment { image: &self.area, load: Load::ClearDepth(0.0) });
+        let bindings = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
         let params = ShadowParams { res: self.settings.resolution, pad: [0; 3] };
-        let instances = FACES * self.casters.len() as u32;
-        for d in geometry.draws.iter().filter(|d| d.index_count > 0) {
-            rec.draw_indexed_instanced(&self.pipe, &bindings, &params, d.first_index, d.index_count, instances)?;
-        }
+        rec.draw_indirect(&self.pipe, &bindings, &params, &self.args)?;
         rec.end_rendering();
         rec.kernels_read_fragment_writes();
         Ok(())
@@ -144,8 +259,78 @@ impl ShadowMaps {
 
     /// The buffers, by name and bytes.
     pub fn buffers(&self) -> Vec<(String, u64)> {
-        [&self.slots, &self.records, &self.maps].iter().map(|b| (b.name.clone(), b.size)).collect()
+        [&self.slots, &self.records, &self.batches, &self.entries, &self.args, &self.maps].iter().map(|b| (b.name.clone(), b.size)).collect()
     }
+}
+
+/// The largest resolution at most `requested` (halving) whose maps for `casters` fit one storage
+/// binding, and their bytes; an error where not even [`MIN_DEGRADED_RESOLUTION`] fits.
+fn fitting_resolution(ctx: &Context, requested: u32, casters: usize) -> Result<(u32, u64)> {
+    let bytes = |res: u32| 4 * FACES as u64 * res as u64 * res as u64 * casters as u64;
+    let mut res = requested;
+    while crate::vk::memory::check_range(ctx, "shadow maps", bytes(res)).is_err() && res > MIN_DEGRADED_RESOLUTION {
+        res = (res / 2).max(MIN_DEGRADED_RESOLUTION);
+    }
+    crate::vk::memory::check_range(ctx, "shadow maps", bytes(res)).with_context(|| format!("{casters} shadow-casting lights: even at {res}² texels per face their maps pass the device's largest storage binding"))?;
+    Ok((res, bytes(res)))
+}
+
+/// The opaque draws' triangles in batches of [`BATCH_TRIANGLES`] (`shaders::shadow_cull`): the
+/// batch words and each batch's bounding sphere (box centre, half diagonal).
+fn batches(positions: &[[f32; 3]], indices: &[u32], draws: &[Draw]) -> (Vec<u32>, Vec<[f32; 4]>) {
+    let (mut words, mut spheres) = (vec![], vec![]);
+    for d in draws.iter().filter(|d| d.indirect.is_none()) {
+        let triangles = d.index_count / 3;
+        for first in (0..triangles).step_by(BATCH_TRIANGLES as usize) {
+            let count = BATCH_TRIANGLES.min(triangles - first);
+            let start = (d.first_index + 3 * first) as usize;
+            let corners = indices[start..start + 3 * count as usize].iter().map(|&i| Vec3::from_array(positions[i as usize]));
+            let (lo, hi) = corners.fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+            let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+            words.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), start as u32, count, 0, 0]);
+            spheres.push([c.x, c.y, c.z, r]);
+        }
+    }
+    debug_assert_eq!(words.len(), spheres.len() * BATCH_WORDS as usize);
+    (words, spheres)
+}
+
+/// The entries the cull can write for these casters: [`face_mask`] on each batch's sphere
+/// widened by `CULL_MARGIN` of its distance and both radii, so that the GPU's unwidened test in
+/// its own rounding never finds more.
+pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; 4]]) -> u64 {
+    let view: Vec<(Vec3, f32)> = spheres.iter().map(|s| (rotation.transform_point3(Vec3::new(s[0], s[1], s[2])), s[3])).collect();
+    let count_for = |records: &[[f32; 4]]| -> u64 {
+        let mut n = 0u64;
+        for rec in records {
+            let (light, radius) = (Vec3::new(rec[0], rec[1], rec[2]), rec[3]);
+            for &(c, r) in &view {
+                let d = c - light;
+                let widened = r + CULL_MARGIN * (d.length() + r + radius);
+                n += face_mask(d, widened, radius).count_ones() as u64;
+            }
+        }
+        n
+    };
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(16);
+    let chunk = records.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| records.chunks(chunk).map(|c| s.spawn(move || count_for(c))).collect::<Vec<_>>().into_iter().fold(0u64, |a, h| a.saturating_add(h.join().unwrap_or(u64::MAX))))
+}
+
+/// [`count_entries`] as a buffer capacity: at least one entry, and refused in one line where the
+/// entries pass a storage binding or the draw's vertex count.
+fn entry_capacity(ctx: &Context, spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; 4]]) -> Result<u32> {
+    let n = count_entries(spheres, rotation, records).max(1);
+    let most = (u32::MAX / (3 * BATCH_TRIANGLES)) as u64;
+    if n > most {
+        bail!("the shadow maps would draw {n} batches of triangles, more than one indirect draw's {most}: fewer shadow-casting lights or smaller radii");
+    }
+    crate::vk::memory::check_range(ctx, "shadow draw entries", 4 * ENTRY_WORDS as u64 * n)?;
+    Ok(n as u32)
+}
+
+fn entry_buffer(ctx: &Context, capacity: u32) -> Result<Buffer> {
+    Buffer::storage(ctx, "shadow draw entries", 4 * ENTRY_WORDS as u64 * capacity as u64).context("allocating the shadow draw entries")
 }
 
 /// The raster pass's records of `casters` (`shaders::shadow::caster_record`).

@@ -284,7 +284,9 @@ pub fn animate(base: &[PointLight], t: f32) -> Vec<PointLight> {
 /// lights (every light at 1, none at 0).
 pub fn shadow_casters(n: usize, fraction: f32) -> Result<Vec<bool>> {
     ensure!((0.0..=1.0).contains(&fraction), "shadow fraction {fraction} must be in [0, 1]");
-    let f = fraction as f64;
+    // The fraction as written (the f32's shortest decimal: 0.08, not 0.0799999982), so that
+    // 200 lights at 0.08 give 16 casters.
+    let f: f64 = fraction.to_string().parse().unwrap_or(fraction as f64);
     Ok((0..n).map(|i| ((i + 1) as f64 * f).floor() > (i as f64 * f).floor()).collect())
 }
 
@@ -391,6 +393,7 @@ mod tests {
         // One caster in every run of four lights.
         assert!(quarter.chunks(4).all(|c| c.iter().filter(|&&c| c).count() == 1), "{quarter:?}");
         assert_eq!(shadow_casters(7, 0.5).unwrap().iter().filter(|&&c| c).count(), 3);
+        assert_eq!(shadow_casters(200, 0.08).unwrap().iter().filter(|&&c| c).count(), 16, "0.08 as written, not as its f32");
         assert!(shadow_casters(3, 1.5).is_err() && shadow_casters(3, f32::NAN).is_err());
     }
 }

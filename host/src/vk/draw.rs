@@ -128,14 +128,6 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    /// [`Recorder::draw_indexed`] `instances` times (instance index `0..instances`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn draw_indexed_instanced<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, first_index: u32, index_count: u32, instances: u32) -> VkResult<()> {
-        self.bind_draw(pipe, bindings, params)?;
-        unsafe { self.ctx.device.cmd_draw_indexed(self.cmd, index_count, instances, first_index, 0, 0) };
-        Ok(())
-    }
-
     /// Draws vertices `0..vertex_count` without indices (the vertex shader makes each vertex
     /// from its index), as [`Recorder::draw_indexed`] otherwise.
     pub fn draw<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, vertex_count: u32) -> VkResult<()> {
@@ -153,6 +145,18 @@ impl Recorder<'_> {
         }
         self.bind_draw(pipe, bindings, params)?;
         unsafe { self.ctx.device.cmd_draw_indexed_indirect(self.cmd, args.raw, STRIDE * draw as u64, 1, STRIDE as u32) };
+        Ok(())
+    }
+
+    /// As [`Recorder::draw`], with the vertex count a kernel wrote: the `VkDrawIndirectCommand`
+    /// at the start of `args` (4 words).
+    pub fn draw_indirect<P: Pod>(&mut self, pipe: &GraphicsPipeline<P>, bindings: &[Binding<'_>], params: &P, args: &Buffer) -> VkResult<()> {
+        const SIZE: u64 = std::mem::size_of::<vk::DrawIndirectCommand>() as u64;
+        if SIZE > args.size {
+            return Err(VkError::Kernel { entry: pipe.kernel.fragment, what: format!("indirect draw arguments past the end of {}", args.name) });
+        }
+        self.bind_draw(pipe, bindings, params)?;
+        unsafe { self.ctx.device.cmd_draw_indirect(self.cmd, args.raw, 0, 1, SIZE as u32) };
         Ok(())
     }
 

@@ -273,7 +273,7 @@ specular_entries! {
         let t = tile_of_pixel(&p.grid, i);
         let n = counts[t as usize];
         let list = shading::list_range(lists, t * p.light_capacity, if n < p.light_capacity { n } else { p.light_capacity });
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _>(p, bounds, i, depth, normals, albedo, materials, lights, &list);
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &list, &crate::shadow::NoShadows);
     }
 }
 

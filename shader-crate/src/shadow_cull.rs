@@ -1,0 +1,220 @@
+//! Per-face culling of the shadow maps' draws (Olsson et al., "More Efficient Virtual Shadow
+//! Maps for Many Lights", i3D 2014, §4.3 batches and per-face culling): the scene's opaque
+//! triangles go in **batches** of [`BATCH_TRIANGLES`] consecutive ones, each bounded by a sphere;
+//! a batch is drawn into a face of a caster's cube map only where its sphere meets that face's
+//! pyramid within the light's radius ([`face_mask`]). A scene whose lights each reach a small part
+//! of it rasterises that part per face, not the whole scene six times per caster.
+//!
+//! Steps (host: `render/shadow_maps.rs`; the maps themselves: `shadow`):
+//! 1. **Cull** ([`shadow_cull`], one invocation per batch and caster, [`cull_batch`]): the batch's
+//!    sphere moved into view space, tested against the caster's six faces; each face it meets
+//!    takes an entry `(batch, map)` (`map = caster · 6 + face`) from a counter. Entries past the
+//!    capacity are counted and not written.
+//! 2. **Arguments** ([`shadow_draw_args`], one invocation, [`draw_args`]): the indirect draw's
+//!    vertex count, `3 ·` [`BATCH_TRIANGLES`] per written entry.
+//! 3. **Raster** ([`shadow_batch_vs`] + `shadow::shadow_distance_fs`): vertex `v` is corner
+//!    `v % 3` of triangle `(v / 3) % BATCH_TRIANGLES` of entry `v / (3 · BATCH_TRIANGLES)`,
+//!    pulled from the index and position buffers ([`batch_vertex`]); a batch's missing tail
+//!    triangles are put behind the light (`w < 0`: clipped whole).
+//!
+//! **Capacity.** The host counts the entries with the same [`face_mask`] on spheres widened by
+//! [`CULL_MARGIN`] of their distance (`shadow_maps::ShadowMaps`), so rounding on the GPU cannot
+//! add an entry the count left out; the frame loop still reads the counter back and fails
+//! rather than drop triangles.
+//!
+//! **Memory:** [`BATCH_WORDS`]` · 4` = 32 B per batch (0.5 B per triangle), [`ENTRY_WORDS`]` · 4`
+//! = 8 B per entry, [`ARGS_WORDS`]` · 4` B of arguments.
+use crate::shadow::{face_axes, face_clip, FACES};
+use glam::{Mat4, Vec3, Vec4};
+#[cfg(any(feature = "compute", feature = "graphics"))]
+use spirv_std::spirv;
+
+/// Triangles per batch (consecutive in a draw's indices; a draw's last batch may hold fewer).
+pub const BATCH_TRIANGLES: u32 = 64;
+/// Words of a batch: bounding-sphere centre (x, y, z) and radius as `f32` bits, its first index,
+/// its triangle count, two words of padding.
+pub const BATCH_WORDS: u32 = 8;
+/// Words of an entry: batch, map (`caster · 6 + face`).
+pub const ENTRY_WORDS: u32 = 2;
+/// Words of the arguments: a `VkDrawIndirectCommand` (vertex count, instance count, first
+/// vertex, first instance), then the entries the cull counted ([`ARGS_COUNTED`]).
+pub const ARGS_WORDS: u32 = 5;
+/// Word of the arguments that counts entries (written or not).
+pub const ARGS_COUNTED: usize = 4;
+/// Invocations of a cull workgroup (batches along x, casters along y).
+pub const CULL_WORKGROUP: u32 = 64;
+/// The host's widening of a batch's sphere when it sizes the entries, relative to the sphere's
+/// distance from the light plus both radii (module docs: above the GPU's rounding by orders).
+pub const CULL_MARGIN: f32 = 1e-4;
+
+/// The faces (bit `f` for face `f`) of a light of `light_radius` whose pyramid the sphere of
+/// radius `r` at offset `d` from the light meets: none where the sphere lies beyond the light's
+/// radius, all six where it holds the light, else each face whose four side planes (through the
+/// light, `w = ±x` and `w = ±y` in the face's frame) leave the sphere on their inner side or
+/// crossing them. Conservative: a sphere near a pyramid's edge, outside it, may pass.
+#[inline]
+pub fn face_mask(d: Vec3, r: f32, light_radius: f32) -> u32 {
+    let dist2 = d.length_squared();
+    let reach = r + light_radius;
+    if dist2 > reach * reach {
+        return 0;
+    }
+    if dist2 <= r * r {
+        return (1 << FACES) - 1;
+    }
+    // A side plane's unit normal is (forward ∓ right) / √2: the sphere meets its inner side
+    // where (w ∓ x) / √2 ≥ −r.
+    let slack = r * core::f32::consts::SQRT_2;
+    let mut mask = 0;
+    let mut f = 0;
+    while f < FACES {
+        let (right, up, forward) = face_axes(f);
+        let (w, x, y) = (d.dot(forward), d.dot(right), d.dot(up));
+        if w - x >= -slack && w + x >= -slack && w - y >= -slack && w + y >= -slack {
+            mask |= 1 << f;
+        }
+        f += 1;
+    }
+    mask
+}
+
+/// Push constants of the cull: batches, casters, entries the buffer holds.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(not(target_arch = "spirv"), derive(bytemuck::Pod, bytemuck::Zeroable))]
+pub struct ShadowCullParams {
+    pub batches: u32,
+    pub casters: u32,
+    pub capacity: u32,
+    pub pad: u32,
+}
+const _: () = assert!(core::mem::size_of::<ShadowCullParams>() == 16);
+
+/// A batch's bounding sphere (the space of the position buffer) and radius.
+#[inline]
+pub fn batch_sphere(batches: &[u32], b: u32) -> (Vec3, f32) {
+    let w = (b * BATCH_WORDS) as usize;
+    (Vec3::new(f32::from_bits(batches[w]), f32::from_bits(batches[w + 1]), f32::from_bits(batches[w + 2])), f32::from_bits(batches[w + 3]))
+}
+
+/// Step 1 for batch `b` and caster `c` (`casters`: view-space position and radius per caster;
+/// `view`: the position buffer's space → view space, a rotation): appends an entry per face met.
+#[cfg(feature = "compute")]
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: &ShadowCullParams, view: Mat4, batches: &[u32], casters: &[f32], entries: &mut [u32], counted: &mut A) {
+    if b >= p.batches || c >= p.casters {
+        return;
+    }
+    let (centre, r) = batch_sphere(batches, b);
+    let k = (c * crate::shadow::CASTER_WORDS) as usize;
+    let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
+    let d = (view * centre.extend(1.0)).truncate() - light;
+    let mask = face_mask(d, r, casters[k + 3]);
+    let mut f = 0;
+    while f < FACES {
+        if mask & (1 << f) != 0 {
+            let slot = counted.fetch_add(1);
+            if slot < p.capacity {
+                entries[(slot * ENTRY_WORDS) as usize] = b;
+                entries[(slot * ENTRY_WORDS + 1) as usize] = c * FACES + f;
+            }
+        }
+        f += 1;
+    }
+}
+
+/// Step 2: the indirect draw of the entries written (at most `capacity`).
+#[inline]
+pub fn draw_args(args: &mut [u32], capacity: u32) {
+    let written = if args[ARGS_COUNTED] < capacity { args[ARGS_COUNTED] } else { capacity };
+    args[0] = written * 3 * BATCH_TRIANGLES;
+    args[1] = 1;
+    args[2] = 0;
+    args[3] = 0;
+}
+
+/// Step 3: the clip position, offset from the light, map and light radius of vertex `v`.
+#[inline]
+pub fn batch_vertex(v: u32, positions: &[f32], indices: &[u32], view: Mat4, casters: &[f32], batches: &[u32], entries: &[u32]) -> (Vec4, Vec3, u32, f32) {
+    let per_entry = 3 * BATCH_TRIANGLES;
+    let (e, k) = (v / per_entry, v % per_entry);
+    let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
+    let w = (b * BATCH_WORDS) as usize;
+    let c = (map / FACES * crate::shadow::CASTER_WORDS) as usize;
+    if k / 3 >= batches[w + 5] {
+        // Past the batch's last triangle: all three corners behind the light.
+        return (Vec4::new(0.0, 0.0, 0.0, -1.0), Vec3::ZERO, map, 0.0);
+    }
+    let i = indices[(batches[w + 4] + k) as usize];
+    let i = 3 * i as usize;
+    let p = (view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate();
+    let d = p - Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
+    (face_clip(d, map % FACES), d, map, casters[c + 3])
+}
+
+/// Step 1: invocation (batch, caster) = (global x, workgroup y).
+#[cfg(feature = "compute")]
+#[spirv(compute(threads(64)))]
+pub fn shadow_cull(
+    #[spirv(global_invocation_id)] id: glam::UVec3,
+    #[spirv(push_constant)] p: &ShadowCullParams,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] camera: &crate::layout::RasterCamera,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] batches: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] casters: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] entries: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] args: &mut [u32],
+) {
+    cull_batch(id.x, id.y, p, Mat4::from_cols_array_2d(&camera.view), batches, casters, entries, &mut args[ARGS_COUNTED]);
+}
+
+/// Step 2: one invocation.
+#[cfg(feature = "compute")]
+#[spirv(compute(threads(1)))]
+pub fn shadow_draw_args(#[spirv(push_constant)] p: &ShadowCullParams, #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] args: &mut [u32]) {
+    draw_args(args, p.capacity);
+}
+
+/// Step 3, vertex stage.
+#[cfg(feature = "graphics")]
+#[spirv(vertex)]
+#[allow(clippy::too_many_arguments)]
+pub fn shadow_batch_vs(
+    #[spirv(vertex_index)] vertex_index: i32,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] indices: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] camera: &crate::layout::RasterCamera,
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] casters: &[f32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] batches: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
+    #[spirv(position)] out_position: &mut Vec4,
+    out_offset: &mut Vec3,
+    #[spirv(flat)] out_map: &mut u32,
+    #[spirv(flat)] out_radius: &mut f32,
+) {
+    let (clip, d, map, radius) = batch_vertex(vertex_index as u32, positions, indices, Mat4::from_cols_array_2d(&camera.view), casters, batches, entries);
+    *out_position = clip;
+    *out_offset = d;
+    *out_map = map;
+    *out_radius = radius;
+}
+
+/// Typed handles (host side).
+#[cfg(not(target_arch = "spirv"))]
+pub mod handles {
+    use super::ShadowCullParams;
+    use crate::kernels::{Kernel, RasterKernel};
+    use crate::shadow::ShadowParams;
+
+    /// Step 1: camera, batches, caster records, entries, arguments.
+    pub const SHADOW_CULL: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_cull", 5, [super::CULL_WORKGROUP, 1, 1], false);
+    /// Step 2: arguments.
+    pub const SHADOW_DRAW_ARGS: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_draw_args", 1, [1, 1, 1], false);
+    /// Step 3: positions, indices, camera, caster records, batches, entries (vertex stage); maps
+    /// (fragment stage).
+    pub const SHADOW_BATCHES: RasterKernel<ShadowParams> = RasterKernel::with_vertex_buffers("shadow_cull::shadow_batch_vs", "shadow::shadow_distance_fs", 6, 1, 0);
+}
+
+#[cfg(test)]
+#[path = "shadow_cull_tests.rs"]
+mod tests;
