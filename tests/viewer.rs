@@ -255,3 +255,32 @@ fn the_presented_image_is_the_rendered_frame() {
     assert!(d <= 1, "the presented image differs from the frame by {d}/255");
     assert_matches_render(&shot, &dir);
 }
+
+/// G turns the shadows of the casting lights off and on: a screenshot with shadows equals
+/// `render` with the same `--shadow-fraction`, one after G equals `render` without, and `+`
+/// gives the doubled lights their casters with the same share; the shadow pass shows in the
+/// statistics only while shadows are on. A scene without casters says so on G.
+#[test]
+fn the_viewer_toggles_shadows() {
+    let dir = TempDir::new("viewer-shadows");
+    let shot = |name: &str| dir.join(&format!("{name}.png"));
+    let p = |name: &str| shot(name).to_str().unwrap().to_owned();
+    let script = format!("0 key Space\n2 shot {}\n2 key G\n4 shot {}\n4 key G\n5 key Plus\n7 shot {}\n8 key Escape\n", p("on"), p("off"), p("more"));
+    let args = ["--scene", "city", "--lights", &LIGHTS.to_string(), "--technique", "clustered-bvh", "--shadow-fraction", "0.25"];
+    let err = view(&dir, "shadows", &args, &script);
+    assert!(!err.contains("warning"), "no toggle was refused:\n{err}");
+    let (on, off, more) = (stats(&shot("on")), stats(&shot("off")), stats(&shot("more")));
+    assert_eq!(on["shadows"]["casters"], LIGHTS / 4, "{}", on["shadows"]);
+    assert!(off["shadows"].is_null(), "{}", off["shadows"]);
+    assert_eq!(more["shadows"]["casters"], LIGHTS / 2, "{}", more["shadows"]);
+    assert!(on["gpu_ms"]["passes"]["shadow maps"].is_number() && off["gpu_ms"]["passes"]["shadow maps"].is_null());
+    let share = ["--shadow-fraction", "0.25"];
+    assert_matches_render_of(&shot("on"), &dir, "city", &share);
+    assert_matches_render_of(&shot("off"), &dir, "city", &[]);
+    assert_matches_render_of(&shot("more"), &dir, "city", &share);
+    assert!(worst(&shot("on"), &shot("off")) > 1, "the shadows change nothing in the city");
+
+    let script = format!("0 key G\n2 shot {}\n3 key Escape\n", p("none"));
+    let err = view(&dir, "no-casters", &["--scene", "city", "--lights", "8"], &script);
+    assert!(err.lines().any(|l| l.starts_with("warning: ") && l.contains("no light casts shadows")), "{err}");
+}

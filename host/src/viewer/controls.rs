@@ -21,6 +21,7 @@ pub enum Key {
     Digit(u8),
     Plus,
     Minus,
+    G,
     H,
     V,
     C,
@@ -31,7 +32,7 @@ pub enum Key {
 }
 
 /// Key names as scripts write them (case-insensitive), with the key.
-pub const KEY_NAMES: [(&str, Key); 27] = [
+pub const KEY_NAMES: [(&str, Key); 28] = [
     ("w", Key::W),
     ("a", Key::A),
     ("s", Key::S),
@@ -52,6 +53,7 @@ pub const KEY_NAMES: [(&str, Key); 27] = [
     ("9", Key::Digit(9)),
     ("plus", Key::Plus),
     ("minus", Key::Minus),
+    ("g", Key::G),
     ("h", Key::H),
     ("v", Key::V),
     ("c", Key::C),
@@ -88,6 +90,8 @@ pub enum Action {
     /// `+` / `-`: twice / half the lights.
     MoreLights,
     FewerLights,
+    /// G: shadows on or off (the lights that cast them).
+    ToggleShadows,
     /// H: heatmap on or off.
     ToggleHeatmap,
     /// V: the next view (shaded, heatmap, clusters, normals, depth).
@@ -111,6 +115,7 @@ impl Action {
             Key::Digit(d) => Action::Technique(d.saturating_sub(1) as usize),
             Key::Plus => Action::MoreLights,
             Key::Minus => Action::FewerLights,
+            Key::G => Action::ToggleShadows,
             Key::H => Action::ToggleHeatmap,
             Key::V => Action::NextView,
             Key::Space => Action::TogglePause,

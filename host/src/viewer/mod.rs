@@ -169,6 +169,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::Digit9 => Key::Digit(9),
         KeyCode::Equal | KeyCode::NumpadAdd => Key::Plus,
         KeyCode::Minus | KeyCode::NumpadSubtract => Key::Minus,
+        KeyCode::KeyG => Key::G,
         KeyCode::KeyH => Key::H,
         KeyCode::KeyV => Key::V,
         KeyCode::KeyC => Key::C,

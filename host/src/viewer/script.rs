@@ -71,7 +71,7 @@ impl Script {
                 }
                 Ok(())
             };
-            let key = |name: &str| Key::named(name).with_context(|| format!("line {n}: unknown key {name:?} (W A S D Q E Ctrl Shift Tab 1-9 Plus Minus H V C Space F1 F12 Escape)"));
+            let key = |name: &str| Key::named(name).with_context(|| format!("line {n}: unknown key {name:?} (W A S D Q E Ctrl Shift Tab 1-9 Plus Minus G H V C Space F1 F12 Escape)"));
             let button = |name: &str| match name.to_ascii_lowercase().as_str() {
                 "right" => Ok(Button::Right),
                 "left" => Ok(Button::Left),

@@ -35,6 +35,11 @@ pub struct Viewer {
     spot_share: Option<lights::SpotShare>,
     /// The lights of the current frame: `lights::animate(base_lights, time)`.
     lights: Vec<PointLight>,
+    /// Which lights cast shadows (empty: none), whether they do now (G), and the share they
+    /// were generated with (`--shadow-fraction`: a new light count gets its casters alike).
+    casters: Vec<bool>,
+    shadows_on: bool,
+    shadow_share: Option<f32>,
     seed: u64,
     pub settings: Settings,
     pub camera: FlyCamera,
@@ -58,11 +63,16 @@ impl Viewer {
     /// camera, else the scene's camera does).
     pub fn new(gpu: &Gpu, a: &RenderArgs) -> Result<Self> {
         crate::render_cmd::check_args(gpu, a)?;
+        if a.shadow_reference {
+            crate::bail_input!("view does not take --shadow-reference: the ray-cast reference shades one frame on the CPU (use render)");
+        }
         let mut scene = Scene::load(&a.scene, &a.assets)?;
         for w in &scene.warnings {
             eprintln!("warning: {w}");
         }
-        // The lights as `render` makes them (with their cones in `scene.spots`).
+        // The lights as `render` makes them (with their cones in `scene.spots` and their shadow
+        // flags in `scene.shadows`).
+        let mut shadow_share = None;
         let spot_share = match scene.lights.is_empty() {
             true => {
                 if a.lights == 0 {
@@ -74,7 +84,14 @@ impl Viewer {
                 let cones = share.cones(generated.len()).map_err(bad_input)?;
                 let n = generated.len();
                 scene.add_lights(generated.into_iter().zip(cones.into_iter().chain(std::iter::repeat(None)).take(n)));
+                if a.shadow_fraction > 0.0 {
+                    scene.shadows = lights::shadow_casters(n, a.shadow_fraction).map_err(bad_input)?;
+                    shadow_share = Some(a.shadow_fraction);
+                }
                 (a.spot_fraction > 0.0).then_some(share)
+            }
+            false if a.shadow_fraction > 0.0 => {
+                crate::bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description)")
             }
             false if a.spot_fraction > 0.0 => {
                 crate::bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)")
@@ -96,6 +113,9 @@ impl Viewer {
         let time = a.time.unwrap_or(0.0);
         let lights = lights::animate(&base_lights, time);
         Ok(Self {
+            casters: scene.shadows.clone(),
+            shadows_on: true,
+            shadow_share,
             scene,
             scene_camera,
             flat,
@@ -130,6 +150,7 @@ impl Viewer {
         self.scene.camera = self.camera.at.apply(&self.scene_camera);
         let mut input = scene_input(&self.scene, &self.flat, &self.lights);
         input.nurbs_tolerance = self.nurbs_tolerance;
+        render::renderer::check_shadow_scene(&input, &self.settings).map_err(bad_input)?;
         self.renderer = Some(Renderer::new(gpu, &input, &self.settings).context("creating the renderer")?);
         self.recent.clear();
         self.text.reset();
@@ -159,6 +180,7 @@ impl Viewer {
             },
             Action::MoreLights => self.set_light_count(gpu, self.base_lights.len().saturating_mul(2)),
             Action::FewerLights => self.set_light_count(gpu, (self.base_lights.len() / 2).max(1)),
+            Action::ToggleShadows => self.toggle_shadows(gpu),
             Action::ToggleHeatmap => self.set_view(gpu, if self.settings.view == View::Heatmap { View::Shaded } else { View::Heatmap }),
             Action::NextView => {
                 let i = View::FRAME.iter().position(|&v| v == self.settings.view).unwrap_or(0);
@@ -211,13 +233,64 @@ impl Viewer {
             ),
             None => vec![],
         };
+        let casters = match self.shadow_share {
+            Some(share) => lights::shadow_casters(n, share)?,
+            None if self.casters.contains(&true) => anyhow::bail!(
+                "{what}: this scene's shadow-casting lights are listed one by one (a description's [[light]] or shadow_fraction), so their count stays; generated casters (--shadow-fraction) follow a new count"
+            ),
+            None => vec![],
+        };
         preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.light_record, self.settings.tile_size, n as u64, &what)?;
         let base = lights::uniform(&self.scene, n, self.seed).with_context(|| format!("generating {what}"))?;
         let animated = lights::animate(&base, self.time);
+        if casters.contains(&true) || self.scene.shadows.contains(&true) {
+            // Shadow flags are per light: the renderer is made anew for the new count.
+            let old = self.scene.shadows.clone();
+            self.scene.shadows = if self.shadows_on { casters.clone() } else { vec![] };
+            let old_spots = std::mem::replace(&mut self.scene.spots, spots);
+            let old_lights = std::mem::replace(&mut self.lights, animated);
+            if let Err(e) = self.rebuild(gpu) {
+                (self.scene.shadows, self.scene.spots, self.lights) = (old, old_spots, old_lights);
+                return Err(e);
+            }
+            (self.base_lights, self.casters) = (base, casters);
+            return Ok(());
+        }
         if let Some(r) = self.renderer.as_mut() {
             r.set_lights(gpu, &animated, &spots)?;
         }
         (self.base_lights, self.lights, self.scene.spots) = (base, animated, spots);
+        self.text.reset();
+        Ok(())
+    }
+
+    /// Shadows on or off: the renderer made anew with the casters' flags or without them (a
+    /// technique that renders no shadows refuses, and the viewer keeps what it had).
+    fn toggle_shadows(&mut self, gpu: &Gpu) -> Result<()> {
+        if !self.casters.contains(&true) {
+            anyhow::bail!("no light casts shadows (--shadow-fraction, [[light]] shadows = true, [lights] shadow_fraction)");
+        }
+        let old = std::mem::replace(&mut self.scene.shadows, if self.shadows_on { vec![] } else { self.casters.clone() });
+        if let Err(e) = self.rebuild(gpu) {
+            self.scene.shadows = old;
+            return Err(e);
+        }
+        self.shadows_on = !self.shadows_on;
+        Ok(())
+    }
+
+    /// A new renderer for the scene as it stands (its lights, shadow flags and camera), where
+    /// the window has a size; on an error the old one stays.
+    fn rebuild(&mut self, gpu: &Gpu) -> Result<()> {
+        if self.renderer.is_none() {
+            return Ok(());
+        }
+        self.scene.camera = self.camera.at.apply(&self.scene_camera);
+        let mut input = scene_input(&self.scene, &self.flat, &self.lights);
+        input.nurbs_tolerance = self.nurbs_tolerance;
+        render::renderer::check_shadow_scene(&input, &self.settings)?;
+        self.renderer = Some(Renderer::new(gpu, &input, &self.settings).context("creating the renderer")?);
+        self.recent.clear();
         self.text.reset();
         Ok(())
     }
