@@ -15,7 +15,9 @@
 //! 3. **Raster** ([`shadow_batch_vs`] + `shadow::shadow_distance_fs`): vertex `v` is corner
 //!    `v % 3` of triangle `(v / 3) % BATCH_TRIANGLES` of entry `v / (3 · BATCH_TRIANGLES)`,
 //!    pulled from the index and position buffers ([`batch_vertex`]); a batch's missing tail
-//!    triangles are put behind the light (`w < 0`: clipped whole).
+//!    triangles, and triangles that cannot draw into the face ([`triangle_outside`]: beyond the
+//!    radius, or outside a side plane of the face), are put behind the light (`w < 0`: clipped
+//!    whole, never set up).
 //!
 //! **Capacity.** The host counts the entries with the same [`face_mask`] on spheres widened by
 //! [`CULL_MARGIN`] of their distance (`shadow_maps::ShadowMaps`), so rounding on the GPU cannot
@@ -134,7 +136,46 @@ pub fn draw_args(args: &mut [u32], capacity: u32) {
     args[3] = 0;
 }
 
-/// Step 3: the clip position, offset from the light, map and light radius of vertex `v`.
+/// Whether the triangle with corners at offsets `d0, d1, d2` from a light of `radius` can draw
+/// nothing into face `f`: its plane passes farther than the radius from the light, or all three
+/// corners lie outside one of the face pyramid's side planes (the clipper would remove it whole).
+/// Conservative: a kept triangle may still draw nothing.
+#[inline]
+pub fn triangle_outside(d0: Vec3, d1: Vec3, d2: Vec3, f: u32, radius: f32) -> bool {
+    let n = (d1 - d0).cross(d2 - d0);
+    let n2 = n.length_squared();
+    // Plane distance above the radius, with a margin for rounding (a degenerate triangle, n = 0,
+    // draws nothing either way and is kept).
+    let reach = radius * PLANE_MARGIN;
+    if n2 > 0.0 && n.dot(d0) * n.dot(d0) > reach * reach * n2 {
+        return true;
+    }
+    let (right, up, forward) = face_axes(f);
+    let (w, x, y) = (Vec3::new(d0.dot(forward), d1.dot(forward), d2.dot(forward)), Vec3::new(d0.dot(right), d1.dot(right), d2.dot(right)), Vec3::new(d0.dot(up), d1.dot(up), d2.dot(up)));
+    all_negative(w - x) || all_negative(w + x) || all_negative(w - y) || all_negative(w + y)
+}
+
+/// Whether all three components are below 0 (three corners outside one plane).
+#[inline]
+fn all_negative(s: Vec3) -> bool {
+    s.x < 0.0 && s.y < 0.0 && s.z < 0.0
+}
+
+/// Offset from `light` of the vertex at index slot `slot`, in view space. (A function, not a
+/// closure over the buffers: rust-gpu rejects closures that capture storage-buffer slices.)
+#[inline]
+fn corner_offset(positions: &[f32], indices: &[u32], slot: usize, view: Mat4, light: Vec3) -> Vec3 {
+    let i = 3 * indices[slot] as usize;
+    (view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate() - light
+}
+
+/// The plane-distance test's radius is widened by this factor (rounding of the cross product).
+pub const PLANE_MARGIN: f32 = 1.001;
+
+/// Step 3: the clip position, offset from the light, map and light radius of vertex `v`. Each
+/// corner fetches its whole triangle and tests it ([`triangle_outside`]), so all three agree
+/// and a triangle that cannot draw into the face is put behind the light (`w < 0`, clipped
+/// whole) before the rasteriser sets it up: a batch's sphere bounds it coarsely.
 #[inline]
 pub fn batch_vertex(v: u32, positions: &[f32], indices: &[u32], view: Mat4, casters: &[f32], batches: &[u32], entries: &[u32]) -> (Vec4, Vec3, u32, f32) {
     let per_entry = 3 * BATCH_TRIANGLES;
@@ -142,15 +183,24 @@ pub fn batch_vertex(v: u32, positions: &[f32], indices: &[u32], view: Mat4, cast
     let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
     let w = (b * BATCH_WORDS) as usize;
     let c = (map / FACES * crate::shadow::CASTER_WORDS) as usize;
+    let behind = (Vec4::new(0.0, 0.0, 0.0, -1.0), Vec3::ZERO, map, 0.0);
     if k / 3 >= batches[w + 5] {
-        // Past the batch's last triangle: all three corners behind the light.
-        return (Vec4::new(0.0, 0.0, 0.0, -1.0), Vec3::ZERO, map, 0.0);
+        // Past the batch's last triangle.
+        return behind;
     }
-    let i = indices[(batches[w + 4] + k) as usize];
-    let i = 3 * i as usize;
-    let p = (view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate();
-    let d = p - Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
-    (face_clip(d, map % FACES), d, map, casters[c + 3])
+    let light = Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
+    let radius = casters[c + 3];
+    let first = (batches[w + 4] + k - k % 3) as usize;
+    let (d0, d1, d2) = (corner_offset(positions, indices, first, view, light), corner_offset(positions, indices, first + 1, view, light), corner_offset(positions, indices, first + 2, view, light));
+    if triangle_outside(d0, d1, d2, map % FACES, radius) {
+        return behind;
+    }
+    let d = match k % 3 {
+        0 => d0,
+        1 => d1,
+        _ => d2,
+    };
+    (face_clip(d, map % FACES), d, map, radius)
 }
 
 /// Step 1: invocation (batch, caster) = (global x, workgroup y).

@@ -104,6 +104,7 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
     assert_eq!(args[..4], [counted * 3 * BATCH_TRIANGLES, 1, 0, 0]);
     // Draw: (triangle, map) pairs the entries rasterise.
     let mut drawn = std::collections::HashSet::new();
+    let mut culled = 0;
     for v in (0..args[0]).step_by(3) {
         let (clip, _, map, radius) = batch_vertex(v, &positions, &indices, view, &casters, &batches, &entries);
         let e = v / (3 * BATCH_TRIANGLES);
@@ -112,6 +113,18 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
         let tri = b * BATCH_TRIANGLES + local;
         if local >= batches[(b * BATCH_WORDS + 5) as usize] {
             assert!(clip.w < 0.0, "tail vertex {v} not behind the light");
+            continue;
+        }
+        // The triangle's three corners agree on whether it is culled (put behind the light with
+        // radius 0; a kept triangle's corner may lie behind the face's plane too).
+        let culled_at = |u: u32| {
+            let (clip, _, _, radius) = batch_vertex(u, &positions, &indices, view, &casters, &batches, &entries);
+            radius == 0.0 && clip == Vec4::new(0.0, 0.0, 0.0, -1.0)
+        };
+        let cull = culled_at(v);
+        assert!(culled_at(v + 1) == cull && culled_at(v + 2) == cull, "triangle {tri}'s corners disagree on its cull");
+        if cull {
+            culled += 1;
             continue;
         }
         assert_eq!(radius, lights[(map / FACES) as usize].1);
@@ -131,9 +144,42 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
         }
     }
     assert!(seen > 50, "{seen} corners seen");
+    assert!(culled > drawn.len() / 4, "{culled} triangles culled, {} drawn: the per-triangle test culls next to nothing", drawn.len());
     // A capacity below the count: every entry counted, only the capacity's worth written.
     let (short, args) = run(counted / 2);
     assert_eq!(args[ARGS_COUNTED], counted);
     assert_eq!(args[0], counted / 2 * 3 * BATCH_TRIANGLES);
     assert!(short.iter().all(|&w| w != u32::MAX));
+}
+
+/// The per-triangle test never culls a triangle with a point inside the face's pyramid within the
+/// radius (points sampled over random triangles), and culls ones wholly beyond the radius or
+/// behind a side plane.
+#[test]
+fn the_triangle_test_keeps_every_triangle_that_reaches_the_face() {
+    let mut rng = Rng(9);
+    let (mut kept, mut culled) = (0, 0);
+    for _ in 0..4000 {
+        let c = Vec3::new(range(&mut rng, -6.0, 6.0), range(&mut rng, -6.0, 6.0), range(&mut rng, -6.0, 6.0));
+        let s = range(&mut rng, 0.1, 4.0);
+        let (d0, d1, d2) = (c + random_in_ball(&mut rng, s), c + random_in_ball(&mut rng, s), c + random_in_ball(&mut rng, s));
+        let radius = range(&mut rng, 1.0, 6.0);
+        for f in 0..FACES {
+            let out = triangle_outside(d0, d1, d2, f, radius);
+            if out {
+                culled += 1;
+            } else {
+                kept += 1;
+            }
+            for _ in 0..60 {
+                let (a, b) = (rng.unit(), rng.unit());
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                let p = d0 + (d1 - d0) * a + (d2 - d0) * b;
+                if p.length() <= radius && p.length() > 1e-4 && cube_face(p) == f {
+                    assert!(!out, "triangle {d0} {d1} {d2} culled from face {f} though {p} lies in it within radius {radius}");
+                }
+            }
+        }
+    }
+    assert!(kept > 2000 && culled > 2000, "{kept} kept, {culled} culled");
 }
