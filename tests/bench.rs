@@ -122,7 +122,9 @@ fn tiny_accuracy_study() {
     assert!(run.ok, "study failed:\n{}", run.stderr);
     let csv = Csv::read(&dir.join("accuracy.csv"));
     let msaa: Vec<_> = csv.rows().filter(|r| r.get("knob") == "MSAA").collect();
-    assert_eq!(csv.rows.len(), 18 + msaa.len(), "{:?}", csv.rows);
+    let shadows = csv.rows().filter(|r| r.get("knob") == "shadows").count();
+    assert_eq!(shadows, 8, "one shadows row per map resolution and filter");
+    assert_eq!(csv.rows.len(), 18 + shadows + msaa.len(), "{:?}", csv.rows);
     // MSAA: one sample and four at least (every device has 4); more samples come closer to the
     // 16× supersampled reference, so the knob reaches the frame.
     let msaa_psnr = |prefix: &str| msaa.iter().find(|r| r.get("setting").starts_with(prefix)).unwrap_or_else(|| panic!("no MSAA row {prefix:?}")).num("psnr_db");
@@ -199,6 +201,33 @@ fn accuracy_study_oit_knob() {
     assert!(psnr("k = 8") >= psnr("k = 1"), "8 sorted layers are not less accurate than 1 here");
     assert!(oit.iter().all(|r| r.num("transparent_ms") > 0.0), "the transparent passes are timed");
     assert!(std::fs::read_to_string(dir.join("pareto-oit-glass-stack.svg")).expect("OIT pareto plot").starts_with("<svg"));
+}
+
+/// The shadows knob of the accuracy study on a wall over a floor (10 % of 40 generated lights
+/// casting): every resolution and filter is a row measured against the ray-cast reference, the
+/// knob reaches the maps (the coarsest and the finest settings give different errors), the finest
+/// maps are closer to the reference than the coarsest, the frames are timed, and the Pareto plot
+/// is written.
+#[test]
+fn accuracy_study_shadows_knob() {
+    let dir = TempDir::new("accuracy-shadows");
+    let out = dir.path().to_str().unwrap();
+    dir.write("floor.obj", "v -6 0 -6\nv 6 0 -6\nv 6 0 6\nv -6 0 6\nv 0 0 -6\nv 0 0 6\nv 0 2 6\nv 0 2 -6\nf 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 5 8 7\nf 5 7 6\n");
+    let scene = dir.write("wall.toml", "geometry = \"floor.obj\"\n[camera]\nposition = [0, 14, 0.01]\ntarget = [0, 0, 0]\nfov_y = 60\nnear = 0.5\nfar = 40\n");
+    let run = manylights([
+        "bench", "--study", "accuracy", "--knobs", "shadows", "--lights", "40", "--scenes", scene.to_str().unwrap(), "--width", "160", "--height", "90", "--frames", "1", "--out", out,
+    ]);
+    assert!(run.ok, "study failed:\n{}", run.stderr);
+    let csv = Csv::read(&dir.join("accuracy.csv"));
+    let rows: Vec<_> = csv.rows().filter(|r| r.get("knob") == "shadows").collect();
+    assert_eq!(rows.len(), 8, "one row per resolution and filter");
+    let error = |i: usize| (rows[i].num("psnr_db"), rows[i].num("max_abs_255"), rows[i].num("pixels_differing_pct"));
+    eprintln!("32² nearest {:?}, 2048² bilinear {:?}", error(0), error(7));
+    assert_ne!(error(0), error(7), "32² nearest and 2048² bilinear give the same image");
+    assert!(rows[7].num("psnr_db") > rows[0].num("psnr_db"), "2048² is no closer to the ray cast than 32²: {:?} against {:?}", error(7), error(0));
+    assert!(rows.iter().all(|r| r.num("frame_ms") > 0.0), "the frames are timed");
+    let plot = std::fs::read_dir(dir.path()).unwrap().filter_map(|e| e.ok()).find(|e| e.file_name().to_string_lossy().starts_with("pareto-shadows-"));
+    assert!(std::fs::read_to_string(plot.expect("shadows pareto plot").path()).unwrap().starts_with("<svg"));
 }
 
 /// `bench` on a scene with transparent materials: every technique with a transparent pass is

@@ -268,12 +268,14 @@ mod tests {
         assert_eq!(specialise(&t, 0).mode, 1);
         // Every mix has its own variant.
         let mut seen = [false; LIGHT_TYPE_VARIANTS];
-        for compact in [0, EFFECT_COMPACT_LIGHTS] {
-            for spots in [false, true] {
-                for d in 0..=MAX_DIRECTIONAL_LIGHTS {
-                    let v = light_type_variant(light_effects(spots, d) | compact);
-                    assert!(!seen[v], "variant {v} twice");
-                    seen[v] = true;
+        for shadows in [0, EFFECT_SHADOWS] {
+            for compact in [0, EFFECT_COMPACT_LIGHTS] {
+                for spots in [false, true] {
+                    for d in 0..=MAX_DIRECTIONAL_LIGHTS {
+                        let v = light_type_variant(light_effects(spots, d) | compact | shadows);
+                        assert!(!seen[v], "variant {v} twice");
+                        seen[v] = true;
+                    }
                 }
             }
         }

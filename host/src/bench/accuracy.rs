@@ -42,6 +42,12 @@
 //!    `shaders::compact_light`), with `clustered-bvh`; reference: brute force with full records.
 //!    The compact rows' error is the quantisation of position, radius and colour; their time
 //!    includes the decode at every light read (and the halved light buffer's bandwidth).
+//! 9. **shadows** — cube shadow maps at 32², 128², 512² and 2048² per face (lower where the maps
+//!    must degrade to fit), nearest and bilinear, with `clustered-bvh`, 10 % of the lights casting
+//!    shadows, at most 64 (`SHADOW_SHARE`, `SHADOW_CASTERS`); reference: `deferred`'s frame shaded on the CPU with exact
+//!    ray-cast visibility (`render::cpu_shading`), timed by the whole GPU frame (its own Pareto
+//!    plot). Scenes with transparency or NURBS patches, which shadows refuse, get no rows.
+use crate::render::shadow_maps::{ShadowFilter, ShadowSettings};
 use super::{technique_name, BenchArgs};
 use crate::gpu::Gpu;
 use crate::render::light_record::LightRecord;
@@ -76,10 +82,12 @@ pub enum Knob {
     Msaa,
     /// 8. light record (full or compact).
     LightRecord,
+    /// 9. shadow-map resolution and filter (a share of the lights casting shadows).
+    Shadows,
 }
 
 impl Knob {
-    pub const ALL: [Knob; 8] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation, Knob::Msaa, Knob::LightRecord];
+    pub const ALL: [Knob; 9] = [Knob::Normals, Knob::Falloff, Knob::TileSize, Knob::Culling, Knob::Oit, Knob::Tessellation, Knob::Msaa, Knob::LightRecord, Knob::Shadows];
 }
 
 impl std::fmt::Display for Knob {
@@ -185,7 +193,7 @@ fn frame_ms(f: &Frame) -> (f64, f64) {
 pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
     let n = *a.lights.iter().min_by_key(|&&n| (n as i64 - 10_000).abs()).context("--lights is empty")?;
     let mut rows = Vec::new();
-    let bar = indicatif::ProgressBar::new((a.scenes.len() * 27) as u64);
+    let bar = indicatif::ProgressBar::new((a.scenes.len() * 36) as u64);
     for name in &a.scenes {
         let scene = super::load_scene(name, a)?;
         let base = lights::uniform(&scene, n, a.seed).context("generating lights")?;
@@ -331,6 +339,30 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
                 measure(LIGHT_RECORD_KNOB, format!("{} ({} B per light)", record.name(), record.bytes_per_light()), &reference, &f, None);
             }
         }
+        // 9: reference = deferred's frame shaded on the CPU with ray-cast shadows
+        // (`render::cpu_shading`), `SHADOW_SHARE` of the lights casting.
+        if wants(Knob::Shadows) && !scene.has_transparency() && scene.nurbs.is_empty() {
+            let share = SHADOW_SHARE.min(SHADOW_CASTERS as f32 / base.len() as f32);
+            let casters = lights::shadow_casters(base.len(), share)?;
+            let run_shadowed = |shadowed: bool, s: &Settings| -> Result<Frame> {
+                let mut input = scene_input(&scene, &flat, &base);
+                input.shadows = if shadowed { &casters } else { &[] };
+                bar.inc(1);
+                render::render(gpu, &input, s)
+            };
+            let plain = Settings { read_back: true, ..settings(a, Technique::Deferred, a.tile_size, Precision::Oct16) };
+            let mut reference = run_shadowed(false, &plain)?;
+            let view = scene_input(&scene, &flat, &base).view;
+            let mut shadows = render::cpu_shading::Shadows::of_scene(&scene, &view);
+            shadows.casters = &casters;
+            reference.pixels = render::cpu_shading::shade(&scene, &reference, &plain, Some(&shadows))?;
+            for (resolution, filter) in SHADOW_SETTINGS {
+                let shadow = ShadowSettings { resolution, filter };
+                let f = run_shadowed(true, &Settings { shadow, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) })?;
+                let drawn = f.shadows.map_or(resolution, |s| s.resolution);
+                measure(SHADOW_KNOB, format!("{drawn}² per face, {}", format!("{filter:?}").to_lowercase()), &reference, &f, None);
+            }
+        }
         let tess_rows = rows.iter_mut().filter(|r| r.scene == *name && r.knob == TESS_KNOB);
         for (r, e) in tess_rows.zip(tess_errors) {
             r.geometric_error = Some(e);
@@ -426,6 +458,21 @@ const LIGHT_RECORD_KNOB: &str = "light record";
 const OIT_KNOB: &str = "transparency (OIT)";
 const TESS_KNOB: &str = "tessellation";
 const MSAA_KNOB: &str = "MSAA";
+const SHADOW_KNOB: &str = "shadows";
+/// The shadows knob's share of shadow-casting lights (at most [`SHADOW_CASTERS`] of them), and
+/// its settings (coarsest first).
+pub const SHADOW_SHARE: f32 = 0.1;
+pub const SHADOW_CASTERS: usize = 64;
+pub const SHADOW_SETTINGS: [(u32, ShadowFilter); 8] = [
+    (32, ShadowFilter::Nearest),
+    (32, ShadowFilter::Bilinear),
+    (128, ShadowFilter::Nearest),
+    (128, ShadowFilter::Bilinear),
+    (512, ShadowFilter::Nearest),
+    (512, ShadowFilter::Bilinear),
+    (2048, ShadowFilter::Nearest),
+    (2048, ShadowFilter::Bilinear),
+];
 /// The MSAA knob's reference: this many columns × rows of pixels per pixel (16× supersampling;
 /// square, so the frame keeps its aspect).
 pub const MSAA_REFERENCE_GRID: (u32, u32) = (4, 4);
@@ -459,6 +506,13 @@ pub fn pareto_plots(rows: &[AccuracyRow], dir: &Path) -> Result<Vec<PathBuf>> {
             let name = PathBuf::from(format!("pareto-tessellation-{}.svg", slug(scene)));
             let title = format!("{scene}: NURBS tessellation image error vs tessellation + G-buffer time");
             plot(&tess, &[TESS_KNOB], |r| r.tessellation_ms, "tessellation pass + G-buffer ms (median)", &title, &dir.join(&name))?;
+            files.push(name);
+        }
+        let shadows = of(&[SHADOW_KNOB]);
+        if !shadows.is_empty() {
+            let name = PathBuf::from(format!("pareto-shadows-{}.svg", slug(scene)));
+            let title = format!("{scene}: shadow-map image error (against ray-cast shadows) vs frame time");
+            plot(&shadows, &[SHADOW_KNOB], |r| r.frame_ms, "GPU frame ms (median)", &title, &dir.join(&name))?;
             files.push(name);
         }
         let msaa = of(&[MSAA_KNOB]);
