@@ -288,7 +288,6 @@ impl Viewer {
         self.scene.camera = self.camera.at.apply(&self.scene_camera);
         let mut input = scene_input(&self.scene, &self.flat, &self.lights);
         input.nurbs_tolerance = self.nurbs_tolerance;
-        render::renderer::check_shadow_scene(&input, &self.settings)?;
         self.renderer = Some(Renderer::new(gpu, &input, &self.settings).context("creating the renderer")?);
         self.recent.clear();
         self.text.reset();
