@@ -11,7 +11,7 @@ use common::temp::TempDir;
 use glam::Vec3;
 use host::render::cpu_shading::{shade, Shadows};
 use host::render::clustered::UniqueClusters;
-use host::render::shadow_maps::{ShadowFilter, ShadowSettings, ShadowStats};
+use host::render::shadow_maps::{ShadowFilter, ShadowRaster, ShadowSettings, ShadowStats};
 use host::render::{self, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
@@ -200,16 +200,36 @@ fn assert_matches_reference(gpu: &host::gpu::Gpu, scene: &Scene, shadow: ShadowS
     (shadowed, f.shadows.expect("the frame made shadow maps"))
 }
 
+/// Both ways of writing the maps' triangles (`--shadow-raster`).
+const RASTERS: [ShadowRaster; 2] = [ShadowRaster::Compute, ShadowRaster::Draw];
+
 /// `deferred` with cube shadow maps against the ray-cast reference on the floor behind a wall, at
-/// both filters.
+/// both filters, the maps written by the compute rasteriser and by the draw.
 #[test]
 fn deferred_shadow_maps_match_the_ray_cast_reference() {
     let gpu = common::gpu();
     let dir = TempDir::new("shadow-maps");
     let scene = scene(&dir, "shadows = true\n");
-    for filter in [ShadowFilter::Nearest, ShadowFilter::Bilinear] {
-        let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings { filter, ..Default::default() }, &format!("{filter:?}"));
-        assert!(shadowed > 3000, "{shadowed} pixels in shadow");
+    for raster in RASTERS {
+        for filter in [ShadowFilter::Nearest, ShadowFilter::Bilinear] {
+            let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings { filter, raster, ..Default::default() }, &format!("{filter:?}, {raster:?}"));
+            assert!(shadowed > 3000, "{shadowed} pixels in shadow");
+        }
+    }
+    common::assert_clean(&gpu);
+}
+
+/// `--shadow-raster` reaches the frame: the compute rasteriser records the shadow pass without
+/// raster work, the draw with it (the frame's pass timings say which), and `--stats` names it.
+#[test]
+fn the_shadow_raster_knob_picks_what_writes_the_maps() {
+    let gpu = common::gpu();
+    let dir = TempDir::new("shadow-raster-knob");
+    let scene = scene(&dir, "shadows = true\n");
+    for (raster, drawn) in [(ShadowRaster::Compute, false), (ShadowRaster::Draw, true)] {
+        let (f, _, _) = shadowed_and_reference(&gpu, &scene, ShadowSettings { raster, ..Default::default() });
+        assert!(f.timings.iter().any(|t| t.name == "shadow maps"), "{raster:?}: no shadow pass");
+        assert_eq!(f.is_raster("shadow maps"), drawn, "{raster:?}: the shadow pass {} raster work", if drawn { "records no" } else { "records" });
     }
     common::assert_clean(&gpu);
 }
@@ -233,8 +253,10 @@ fn hard_cases_match_the_ray_cast_reference() {
     ];
     for (what, obj, light, min_shadowed) in cases {
         let scene = scene_of(&dir, &obj, &description_at(light, "shadows = true\n"));
-        let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings::default(), what);
-        assert!(shadowed >= min_shadowed, "{what}: {shadowed} pixels in shadow");
+        for raster in RASTERS {
+            let (shadowed, _) = assert_matches_reference(&gpu, &scene, ShadowSettings { raster, ..Default::default() }, &format!("{what}, {raster:?}"));
+            assert!(shadowed >= min_shadowed, "{what}: {shadowed} pixels in shadow");
+        }
     }
     common::assert_clean(&gpu);
 }
@@ -250,10 +272,12 @@ fn culled_shadow_maps_match_the_reference_on_the_city() {
     scene.spots.clear();
     scene.shadows = host::scene::lights::shadow_casters(200, 0.0625).unwrap();
     assert_eq!(scene.shadow_casters(), 12);
-    let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings::default(), "city");
-    let tested = sh.batches as u64 * 6 * sh.casters as u64;
-    eprintln!("city: {} batches, {} of {tested} batch-face pairs drawn", sh.batches, sh.entries);
-    assert!(sh.batches > 20 && sh.entries > 0 && (sh.entries as u64) * 4 < tested, "{sh:?}");
+    for raster in RASTERS {
+        let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings { raster, ..Default::default() }, &format!("city, {raster:?}"));
+        let tested = sh.batches as u64 * 6 * sh.casters as u64;
+        eprintln!("city: {} batches, {} of {tested} batch-face pairs drawn", sh.batches, sh.entries);
+        assert!(sh.batches > 20 && sh.entries > 0 && (sh.entries as u64) * 4 < tested, "{sh:?}");
+    }
     common::assert_clean(&gpu);
 }
 
@@ -324,7 +348,7 @@ fn shadow_resolution_and_filter_change_the_image() {
     let gpu = common::gpu();
     let dir = TempDir::new("shadow-knobs");
     let scene = scene(&dir, "shadows = true\n");
-    let at = |resolution, filter| shadowed_and_reference(&gpu, &scene, ShadowSettings { resolution, filter }).0.pixels;
+    let at = |resolution, filter| shadowed_and_reference(&gpu, &scene, ShadowSettings { resolution, filter, ..Default::default() }).0.pixels;
     let changed = |a: &[u32], b: &[u32]| a.iter().zip(b).filter(|(a, b)| channel_diff(**a, **b) > 1).count();
     let coarse = at(32, ShadowFilter::Bilinear);
     let resolution = changed(&at(256, ShadowFilter::Bilinear), &coarse);
@@ -372,7 +396,7 @@ fn render_draws_shadows_or_refuses_them() {
     assert!(r.ok, "{}", r.stderr);
     let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let sh = &stats["shadows"];
-    assert_eq!((sh["casters"].as_u64(), sh["resolution"].as_u64(), sh["filter"].as_str()), (Some(1), Some(64), Some("nearest")), "{sh}");
+    assert_eq!((sh["casters"].as_u64(), sh["resolution"].as_u64(), sh["filter"].as_str(), sh["raster"].as_str()), (Some(1), Some(64), Some("nearest"), Some("compute")), "{sh}");
     assert_eq!(sh["map_bytes"].as_u64(), Some(6 * 64 * 64 * 4), "{sh}");
     assert!(stats["gpu_ms"]["passes"]["shadow maps"].as_f64().is_some(), "no shadow pass timed: {}", stats["gpu_ms"]["passes"]);
     // Without a caster the frame has no shadow pass, buffers or statistics.

@@ -60,6 +60,10 @@ pub struct RenderArgs {
     /// filtering).
     #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowFilter::Bilinear)]
     pub shadow_filter: crate::render::shadow_maps::ShadowFilter,
+    /// What writes the shadow maps' triangles: `compute` (a compute kernel per culled batch and
+    /// face) or `draw` (one indirect draw through the fixed-function rasteriser). Same texels.
+    #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowRaster::Compute)]
+    pub shadow_raster: crate::render::shadow_maps::ShadowRaster,
     /// Shade the frame on the CPU from the technique's read-back G-buffer, with exact ray-cast
     /// shadows for the lights that cast them (`render::cpu_shading`: the reference shadowed
     /// techniques are held to). Not with MSAA, NURBS patches, transparent materials or a debug
@@ -158,7 +162,7 @@ impl RenderArgs {
             dispatch_times: self.dispatch_times,
             msaa: self.msaa,
             light_record: self.light_record,
-            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter },
+            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter, raster: self.shadow_raster },
         }
     }
 }

@@ -252,6 +252,7 @@ pub const ALL: &[Kernel<()>] = &[
     BITONIC_MERGE.erased(),
     crate::shadow_cull::handles::SHADOW_CULL.erased(),
     crate::shadow_cull::handles::SHADOW_DRAW_ARGS.erased(),
+    crate::shadow_raster::handles::SHADOW_RASTER.erased(),
 ];
 
 /// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds

@@ -37,7 +37,7 @@
 //! * [`fragment_atomics`] — atomics on storage-buffer words from fragment shaders.
 //! * [`shadow`] — cube shadow maps: the raster pass that fills them and the per-light lookup
 //!   of the shading loop; [`shadow_cull`] — the batches of triangles culled per face that the
-//!   raster pass draws.
+//!   raster pass draws; [`shadow_raster`] — the same batches rasterised in a compute kernel.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -131,6 +131,7 @@ pub mod scan;
 pub mod shading;
 pub mod shadow;
 pub mod shadow_cull;
+pub mod shadow_raster;
 pub mod spot;
 #[cfg(test)]
 mod sort_acceptance_tests;

@@ -12,7 +12,8 @@
 //!    capacity are counted and not written.
 //! 2. **Arguments** ([`shadow_draw_args`], one invocation, [`draw_args`]): the indirect draw's
 //!    vertex count, `3 ·` [`BATCH_TRIANGLES`] per written entry.
-//! 3. **Raster** ([`shadow_batch_vs`] + `shadow::shadow_distance_fs`): vertex `v` is corner
+//! 3. **Raster**, in a compute kernel (`shadow_raster`, `--shadow-raster compute`) or drawn
+//!    (`--shadow-raster draw`: [`shadow_batch_vs`] + `shadow::shadow_distance_fs`): vertex `v` is corner
 //!    `v % 3` of triangle `(v / 3) % BATCH_TRIANGLES` of entry `v / (3 · BATCH_TRIANGLES)`,
 //!    pulled from the index and position buffers ([`batch_vertex`]); a batch's missing tail
 //!    triangles, and triangles that cannot draw into the face ([`triangle_outside`]: beyond the
@@ -39,10 +40,14 @@ pub const BATCH_WORDS: u32 = 8;
 /// Words of an entry: batch, map (`caster · 6 + face`).
 pub const ENTRY_WORDS: u32 = 2;
 /// Words of the arguments: a `VkDrawIndirectCommand` (vertex count, instance count, first
-/// vertex, first instance), then the entries the cull counted ([`ARGS_COUNTED`]).
-pub const ARGS_WORDS: u32 = 5;
+/// vertex, first instance), the entries the cull counted ([`ARGS_COUNTED`]), then a
+/// `VkDispatchIndirectCommand` of one workgroup per written entry ([`ARGS_DISPATCH`], for
+/// `shadow_raster`).
+pub const ARGS_WORDS: u32 = 8;
 /// Word of the arguments that counts entries (written or not).
 pub const ARGS_COUNTED: usize = 4;
+/// First word of the compute raster's dispatch arguments.
+pub const ARGS_DISPATCH: u32 = 5;
 /// Invocations of a cull workgroup (batches along x, casters along y).
 pub const CULL_WORKGROUP: u32 = 64;
 /// The host's widening of a batch's sphere when it sizes the entries, relative to the sphere's
@@ -126,7 +131,8 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     }
 }
 
-/// Step 2: the indirect draw of the entries written (at most `capacity`).
+/// Step 2: the indirect draw of the entries written (at most `capacity`), and the compute
+/// raster's dispatch of one workgroup per written entry (`indirect::dispatch_args`' grid).
 #[inline]
 pub fn draw_args(args: &mut [u32], capacity: u32) {
     let written = if args[ARGS_COUNTED] < capacity { args[ARGS_COUNTED] } else { capacity };
@@ -134,6 +140,11 @@ pub fn draw_args(args: &mut [u32], capacity: u32) {
     args[1] = 1;
     args[2] = 0;
     args[3] = 0;
+    let groups = crate::indirect::dispatch_args(written, 1);
+    let d = ARGS_DISPATCH as usize;
+    args[d] = groups[0];
+    args[d + 1] = groups[1];
+    args[d + 2] = groups[2];
 }
 
 /// Whether the triangle with corners at offsets `d0, d1, d2` from a light of `radius` can draw
@@ -164,7 +175,7 @@ fn all_negative(s: Vec3) -> bool {
 /// Offset from `light` of the vertex at index slot `slot`, in view space. (A function, not a
 /// closure over the buffers: rust-gpu rejects closures that capture storage-buffer slices.)
 #[inline]
-fn corner_offset(positions: &[f32], indices: &[u32], slot: usize, view: Mat4, light: Vec3) -> Vec3 {
+pub(crate) fn corner_offset(positions: &[f32], indices: &[u32], slot: usize, view: Mat4, light: Vec3) -> Vec3 {
     let i = 3 * indices[slot] as usize;
     (view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate() - light
 }

@@ -357,7 +357,7 @@ pub fn study(gpu: &Gpu, a: &BenchArgs) -> Result<Vec<AccuracyRow>> {
             shadows.casters = &casters;
             reference.pixels = render::cpu_shading::shade(&scene, &reference, &plain, Some(&shadows))?;
             for (resolution, filter) in SHADOW_SETTINGS {
-                let shadow = ShadowSettings { resolution, filter };
+                let shadow = ShadowSettings { resolution, filter, ..Default::default() };
                 let f = run_shadowed(true, &Settings { shadow, ..settings(a, Technique::ClusteredBvh, a.tile_size, Precision::Oct16) })?;
                 let drawn = f.shadows.map_or(resolution, |s| s.resolution);
                 measure(SHADOW_KNOB, format!("{drawn}² per face, {}", format!("{filter:?}").to_lowercase()), &reference, &f, None);

@@ -5,7 +5,10 @@
 //! 1. the maps cleared to "no occluder" and the draw's arguments to zero;
 //! 2. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
 //!    an entry per face its bounding sphere meets within the light's radius;
-//! 3. the arguments kernel, then one indirect draw of every entry's triangles into its face.
+//! 3. the arguments kernel, then every entry's triangles into its face: by default one indirect
+//!    dispatch of the compute rasteriser (`shaders::shadow_raster`, a workgroup per entry), or
+//!    with [`ShadowRaster::Draw`] one indirect draw through the fixed-function rasteriser (the
+//!    two write the same texels; `docs/results/h200/shadows/` measures them side by side).
 //!
 //! Techniques that render shadows bind [`ShadowMaps::slots`] and [`ShadowMaps::maps`] beside
 //! their lights (`FrameInputs::shadow_buffers`).
@@ -23,8 +26,9 @@ use crate::vk::{Attachment, Binding, Buffer, ComputePipeline, Context, GraphicsP
 use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
+use shaders::shadow_raster::ShadowRasterParams;
 use shaders::shadow::{caster_record, ShadowParams, FACES, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
-use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
+use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_DISPATCH, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
 
 /// Texels per face side unless `--shadow-resolution` says otherwise.
 pub const DEFAULT_RESOLUTION: u32 = 256;
@@ -54,17 +58,28 @@ impl ShadowFilter {
     }
 }
 
+/// What writes the culled triangles into the maps (`--shadow-raster`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShadowRaster {
+    /// A compute kernel, a workgroup per culled batch and face (`shaders::shadow_raster`).
+    #[default]
+    Compute,
+    /// One indirect draw through the fixed-function rasteriser (`shaders::shadow_cull`).
+    Draw,
+}
+
 /// The shadow maps' knobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShadowSettings {
     /// Texels per face side.
     pub resolution: u32,
     pub filter: ShadowFilter,
+    pub raster: ShadowRaster,
 }
 
 impl Default for ShadowSettings {
     fn default() -> Self {
-        Self { resolution: DEFAULT_RESOLUTION, filter: ShadowFilter::default() }
+        Self { resolution: DEFAULT_RESOLUTION, filter: ShadowFilter::default(), raster: ShadowRaster::default() }
     }
 }
 
@@ -101,7 +116,9 @@ pub fn check_casters(casters: usize) -> Result<()> {
 pub struct ShadowMaps {
     cull: ComputePipeline<ShadowCullParams>,
     args_pipe: ComputePipeline<ShadowCullParams>,
-    pipe: GraphicsPipeline<ShadowParams>,
+    /// What writes the entries' triangles: the compute rasteriser, or the draw and its render area
+    /// (`res × res`, never tested or written).
+    writer: Writer,
     /// The resolution drawn (the requested one, or lower where it did not fit) and the filter.
     settings: ShadowSettings,
     /// The requested resolution where the maps had to drop below it.
@@ -128,8 +145,12 @@ pub struct ShadowMaps {
     args: Buffer,
     /// Slot-major, face-major, row-major distances.
     pub maps: Buffer,
-    /// The raster pass's render area (`res × res`, never tested or written).
-    area: Image,
+}
+
+/// [`ShadowRaster`]'s pipelines.
+enum Writer {
+    Compute(ComputePipeline<ShadowRasterParams>),
+    Draw { pipe: GraphicsPipeline<ShadowParams>, area: Image },
 }
 
 impl ShadowMaps {
@@ -159,10 +180,17 @@ impl ShadowMaps {
         let (batch_words, spheres) = batches(positions, indices, draws);
         let records_cpu = records(&list, lights_view);
         let capacity = entry_capacity(ctx, &spheres, rotation, &records_cpu)?;
+        let writer = match settings.raster {
+            ShadowRaster::Compute => Writer::Compute(ComputePipeline::new(ctx, &gpu.compute_module, shaders::shadow_raster::handles::SHADOW_RASTER)?),
+            ShadowRaster::Draw => Writer::Draw {
+                pipe: GraphicsPipeline::new(ctx, &gpu.graphics_module, "shadow maps", handles::SHADOW_BATCHES, &[], crate::vk::DepthTest::Off)?,
+                area: Image::target(ctx, "shadow map area", settings.resolution, settings.resolution, TargetFormat::Depth32)?,
+            },
+        };
         let maps = Self {
             cull: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_CULL)?,
             args_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_DRAW_ARGS)?,
-            pipe: GraphicsPipeline::new(ctx, &gpu.graphics_module, "shadow maps", handles::SHADOW_BATCHES, &[], crate::vk::DepthTest::Off)?,
+            writer,
             settings,
             degraded_from,
             records: Buffer::from_slice(ctx, "shadow caster records", &records_cpu)?,
@@ -177,7 +205,6 @@ impl ShadowMaps {
             entries: entry_buffer(ctx, capacity)?,
             args: Buffer::storage(ctx, "shadow draw arguments", 4 * ARGS_WORDS as u64)?,
             maps: Buffer::storage(ctx, "shadow maps", bytes).context("allocating the shadow maps")?,
-            area: Image::target(ctx, "shadow map area", settings.resolution, settings.resolution, TargetFormat::Depth32)?,
         };
         Ok(Some(maps))
     }
@@ -237,7 +264,8 @@ impl ShadowMaps {
         ShadowStats { casters: self.casters.len(), resolution: self.settings.resolution, degraded_from: self.degraded_from, entries: self.counted, batches: self.spheres.len() }
     }
 
-    /// Records the pass: clear, cull, arguments, then one indirect draw of every entry.
+    /// Records the pass: clear, cull, arguments, then every entry's triangles into the maps (one
+    /// indirect dispatch or one indirect draw).
     pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry, camera: &Buffer) -> VkResult<()> {
         rec.fill(&self.maps, NO_OCCLUDER);
         rec.fill(&self.args, 0);
@@ -245,15 +273,24 @@ impl ShadowMaps {
         let p = ShadowCullParams { batches, casters: self.casters.len() as u32, capacity: self.capacity, pad: 0 };
         rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
         rec.dispatch(&self.args_pipe, &[&self.args], &p, [1, 1, 1])?;
-        rec.draws_read_kernel_writes();
-        rec.fragments_read_earlier_writes();
-        rec.transition(&self.area, ImageUse::Undefined, ImageUse::DepthTarget);
-        rec.begin_drawing(&[], Attachment { image: &self.area, load: Load::ClearDepth(0.0) });
-        let bindings = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
-        let params = ShadowParams { res: self.settings.resolution, pad: [0; 3] };
-        rec.draw_indirect(&self.pipe, &bindings, &params, &self.args)?;
-        rec.end_rendering();
-        rec.kernels_read_fragment_writes();
+        match &self.writer {
+            Writer::Compute(raster) => {
+                let params = ShadowRasterParams { res: self.settings.resolution, capacity: self.capacity, pad: [0; 2] };
+                let buffers = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.args, &self.maps];
+                rec.dispatch_indirect(raster, &buffers, &params, &self.args, ARGS_DISPATCH)?;
+            }
+            Writer::Draw { pipe, area } => {
+                rec.draws_read_kernel_writes();
+                rec.fragments_read_earlier_writes();
+                rec.transition(area, ImageUse::Undefined, ImageUse::DepthTarget);
+                rec.begin_drawing(&[], Attachment { image: area, load: Load::ClearDepth(0.0) });
+                let bindings = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
+                let params = ShadowParams { res: self.settings.resolution, pad: [0; 3] };
+                rec.draw_indirect(pipe, &bindings, &params, &self.args)?;
+                rec.end_rendering();
+                rec.kernels_read_fragment_writes();
+            }
+        }
         Ok(())
     }
 
