@@ -11,7 +11,7 @@ use common::temp::TempDir;
 use glam::Vec3;
 use host::render::cpu_shading::{shade, Shadows};
 use host::render::clustered::UniqueClusters;
-use host::render::shadow_maps::{ShadowFilter, ShadowRaster, ShadowSettings, ShadowStats};
+use host::render::shadow_maps::{ShadowFaces, ShadowFilter, ShadowRaster, ShadowSettings, ShadowStats};
 use host::render::{self, Settings, Technique};
 use host::scene::flatten::{flatten, scene_input};
 use host::scene::Scene;
@@ -263,7 +263,8 @@ fn hard_cases_match_the_ray_cast_reference() {
 
 /// Many batches and small lights: the per-face cull sends each caster only the batches near it
 /// (at most a quarter of the batch-face pairs here; printed), and the frame still matches the
-/// ray-cast reference on the city, 12 of 200 lights casting shadows.
+/// ray-cast reference on the city, 12 of 200 lights casting shadows — with both writers, and
+/// with every face as well as only the faces with receivers (which must draw fewer).
 #[test]
 fn culled_shadow_maps_match_the_reference_on_the_city() {
     let gpu = common::gpu();
@@ -272,12 +273,17 @@ fn culled_shadow_maps_match_the_reference_on_the_city() {
     scene.spots.clear();
     scene.shadows = host::scene::lights::shadow_casters(200, 0.0625).unwrap();
     assert_eq!(scene.shadow_casters(), 12);
-    for raster in RASTERS {
-        let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings { raster, ..Default::default() }, &format!("city, {raster:?}"));
+    let mut drawn = vec![];
+    for (raster, faces) in [(ShadowRaster::Compute, ShadowFaces::Receivers), (ShadowRaster::Draw, ShadowFaces::Receivers), (ShadowRaster::Compute, ShadowFaces::All)] {
+        let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings { raster, faces, ..Default::default() }, &format!("city, {raster:?}, {faces:?}"));
         let tested = sh.batches as u64 * 6 * sh.casters as u64;
-        eprintln!("city: {} batches, {} of {tested} batch-face pairs drawn", sh.batches, sh.entries);
+        eprintln!("city ({faces:?}): {} batches, {} of {tested} batch-face pairs drawn, {} of {} faces with receivers", sh.batches, sh.entries, sh.faces_with_receivers, 6 * sh.casters);
         assert!(sh.batches > 20 && sh.entries > 0 && (sh.entries as u64) * 4 < tested, "{sh:?}");
+        drawn.push((sh.entries, sh.faces_with_receivers));
     }
+    // The receivers' faces reach the cull: fewer faces and fewer batch-face pairs than every face.
+    assert_eq!(drawn[0], drawn[1]);
+    assert!(drawn[0].0 < drawn[2].0 && drawn[0].1 < drawn[2].1 && drawn[2].1 == 6 * 12, "{drawn:?}");
     common::assert_clean(&gpu);
 }
 
@@ -396,7 +402,8 @@ fn render_draws_shadows_or_refuses_them() {
     assert!(r.ok, "{}", r.stderr);
     let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let sh = &stats["shadows"];
-    assert_eq!((sh["casters"].as_u64(), sh["resolution"].as_u64(), sh["filter"].as_str(), sh["raster"].as_str()), (Some(1), Some(64), Some("nearest"), Some("compute")), "{sh}");
+    assert_eq!((sh["casters"].as_u64(), sh["resolution"].as_u64(), sh["filter"].as_str(), sh["raster"].as_str(), sh["faces"].as_str()), (Some(1), Some(64), Some("nearest"), Some("compute"), Some("receivers")), "{sh}");
+    assert!(sh["faces_with_receivers"].as_u64().is_some_and(|f| (1..=6).contains(&f)), "{sh}");
     assert_eq!(sh["map_bytes"].as_u64(), Some(6 * 64 * 64 * 4), "{sh}");
     assert!(stats["gpu_ms"]["passes"]["shadow maps"].as_f64().is_some(), "no shadow pass timed: {}", stats["gpu_ms"]["passes"]);
     // Without a caster the frame has no shadow pass, buffers or statistics.

@@ -64,6 +64,10 @@ pub struct RenderArgs {
     /// face) or `draw` (one indirect draw through the fixed-function rasteriser). Same texels.
     #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowRaster::Compute)]
     pub shadow_raster: crate::render::shadow_maps::ShadowRaster,
+    /// Which cube faces of the casters get triangles: `receivers` (only faces the frame's pixels
+    /// look up, found from the G-buffer) or `all` (every face a batch meets). Same image.
+    #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowFaces::Receivers)]
+    pub shadow_faces: crate::render::shadow_maps::ShadowFaces,
     /// Shade the frame on the CPU from the technique's read-back G-buffer, with exact ray-cast
     /// shadows for the lights that cast them (`render::cpu_shading`: the reference shadowed
     /// techniques are held to). Not with MSAA, NURBS patches, transparent materials or a debug
@@ -162,7 +166,7 @@ impl RenderArgs {
             dispatch_times: self.dispatch_times,
             msaa: self.msaa,
             light_record: self.light_record,
-            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter, raster: self.shadow_raster },
+            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter, raster: self.shadow_raster, faces: self.shadow_faces },
         }
     }
 }

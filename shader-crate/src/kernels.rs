@@ -253,6 +253,8 @@ pub const ALL: &[Kernel<()>] = &[
     crate::shadow_cull::handles::SHADOW_CULL.erased(),
     crate::shadow_cull::handles::SHADOW_DRAW_ARGS.erased(),
     crate::shadow_raster::handles::SHADOW_RASTER.erased(),
+    crate::shadow_receivers::handles::SHADOW_RECEIVER_TILES.erased(),
+    crate::shadow_receivers::handles::SHADOW_RECEIVER_FACES.erased(),
 ];
 
 /// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds

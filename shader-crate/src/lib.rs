@@ -37,7 +37,8 @@
 //! * [`fragment_atomics`] — atomics on storage-buffer words from fragment shaders.
 //! * [`shadow`] — cube shadow maps: the raster pass that fills them and the per-light lookup
 //!   of the shading loop; [`shadow_cull`] — the batches of triangles culled per face that the
-//!   raster pass draws; [`shadow_raster`] — the same batches rasterised in a compute kernel.
+//!   raster pass draws; [`shadow_raster`] — the same batches rasterised in a compute kernel;
+//!   [`shadow_receivers`] — the faces whose texels the frame's pixels look up.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -132,6 +133,7 @@ pub mod shading;
 pub mod shadow;
 pub mod shadow_cull;
 pub mod shadow_raster;
+pub mod shadow_receivers;
 pub mod spot;
 #[cfg(test)]
 mod sort_acceptance_tests;

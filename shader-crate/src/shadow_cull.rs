@@ -8,7 +8,7 @@
 //! Steps (host: `render/shadow_maps.rs`; the maps themselves: `shadow`):
 //! 1. **Cull** ([`shadow_cull`], one invocation per batch and caster, [`cull_batch`]): the batch's
 //!    sphere moved into view space, tested against the caster's six faces; each face it meets
-//!    takes an entry `(batch, map)` (`map = caster · 6 + face`) from a counter. Entries past the
+//!    that has receivers on screen (`shadow_receivers`, run before) takes an entry `(batch, map)` (`map = caster · 6 + face`) from a counter. Entries past the
 //!    capacity are counted and not written.
 //! 2. **Arguments** ([`shadow_draw_args`], one invocation, [`draw_args`]): the indirect draw's
 //!    vertex count, `3 ·` [`BATCH_TRIANGLES`] per written entry.
@@ -42,12 +42,14 @@ pub const ENTRY_WORDS: u32 = 2;
 /// Words of the arguments: a `VkDrawIndirectCommand` (vertex count, instance count, first
 /// vertex, first instance), the entries the cull counted ([`ARGS_COUNTED`]), then a
 /// `VkDispatchIndirectCommand` of one workgroup per written entry ([`ARGS_DISPATCH`], for
-/// `shadow_raster`).
-pub const ARGS_WORDS: u32 = 8;
+/// `shadow_raster`), the faces with receivers ([`ARGS_FACES`]).
+pub const ARGS_WORDS: u32 = 9;
 /// Word of the arguments that counts entries (written or not).
 pub const ARGS_COUNTED: usize = 4;
 /// First word of the compute raster's dispatch arguments.
 pub const ARGS_DISPATCH: u32 = 5;
+/// Word of the arguments that counts the casters' faces with receivers (`shadow_receivers`).
+pub const ARGS_FACES: usize = 8;
 /// Invocations of a cull workgroup (batches along x, casters along y).
 pub const CULL_WORKGROUP: u32 = 64;
 /// The host's widening of a batch's sphere when it sizes the entries, relative to the sphere's
@@ -105,11 +107,12 @@ pub fn batch_sphere(batches: &[u32], b: u32) -> (Vec3, f32) {
 }
 
 /// Step 1 for batch `b` and caster `c` (`casters`: view-space position and radius per caster;
-/// `view`: the position buffer's space → view space, a rotation): appends an entry per face met.
+/// `view`: the position buffer's space → view space, a rotation; `needed`: per caster, the faces
+/// with receivers, `shadow_receivers`): appends an entry per face met that has receivers.
 #[cfg(feature = "compute")]
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: &ShadowCullParams, view: Mat4, batches: &[u32], casters: &[f32], entries: &mut [u32], counted: &mut A) {
+pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: &ShadowCullParams, view: Mat4, batches: &[u32], casters: &[f32], needed: &[u32], entries: &mut [u32], counted: &mut A) {
     if b >= p.batches || c >= p.casters {
         return;
     }
@@ -117,7 +120,7 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     let k = (c * crate::shadow::CASTER_WORDS) as usize;
     let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
     let d = (view * centre.extend(1.0)).truncate() - light;
-    let mask = face_mask(d, r, casters[k + 3]);
+    let mask = face_mask(d, r, casters[k + 3]) & needed[c as usize];
     let mut f = 0;
     while f < FACES {
         if mask & (1 << f) != 0 {
@@ -225,8 +228,9 @@ pub fn shadow_cull(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] casters: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] entries: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] args: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] needed: &[u32],
 ) {
-    cull_batch(id.x, id.y, p, Mat4::from_cols_array_2d(&camera.view), batches, casters, entries, &mut args[ARGS_COUNTED]);
+    cull_batch(id.x, id.y, p, Mat4::from_cols_array_2d(&camera.view), batches, casters, needed, entries, &mut args[ARGS_COUNTED]);
 }
 
 /// Step 2: one invocation.
@@ -267,8 +271,8 @@ pub mod handles {
     use crate::kernels::{Kernel, RasterKernel};
     use crate::shadow::ShadowParams;
 
-    /// Step 1: camera, batches, caster records, entries, arguments.
-    pub const SHADOW_CULL: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_cull", 5, [super::CULL_WORKGROUP, 1, 1], false);
+    /// Step 1: camera, batches, caster records, entries, arguments, faces with receivers.
+    pub const SHADOW_CULL: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_cull", 6, [super::CULL_WORKGROUP, 1, 1], false);
     /// Step 2: arguments.
     pub const SHADOW_DRAW_ARGS: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_draw_args", 1, [1, 1, 1], false);
     /// Step 3: positions, indices, camera, caster records, batches, entries (vertex stage); maps

@@ -193,7 +193,7 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     let mut args = [0u32; ARGS_WORDS as usize];
     for c in 0..cull.casters {
         for b in 0..n_batches {
-            cull_batch(b, c, &cull, view, &batches, &casters, &mut entries, &mut args[ARGS_COUNTED]);
+            cull_batch(b, c, &cull, view, &batches, &casters, &[u32::MAX; 8], &mut entries, &mut args[ARGS_COUNTED]);
         }
     }
     draw_args(&mut args, cull.capacity);

@@ -238,7 +238,7 @@ impl Renderer {
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
         let frame = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
-        let shadows = ShadowMaps::new(gpu, &positions, &indices, &geometry.draws, scene.view.rotation(), scene.shadows, &lights_view, s.shadow)?;
+        let shadows = ShadowMaps::new(gpu, &positions, &indices, &geometry.draws, scene.view.rotation(), scene.shadows, &lights_view, s.shadow, (s.width, s.height))?;
         let shadow_effect = if shadows.is_some() { light_types_bits::EFFECT_SHADOWS } else { 0 };
         let params = FrameParams {
             grid,
@@ -327,7 +327,7 @@ impl Renderer {
                         rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets, res.msaa.as_ref(), &res.params))?;
                     }
                     match &res.shadows {
-                        Some(sh) => rec.pass("shadow maps", |rec| sh.record(rec, &res.geometry, &res.camera)),
+                        Some(sh) => rec.pass("shadow maps", |rec| sh.record(rec, &res.geometry, &res.camera, &res.targets.depth_buf, res.params.grid)),
                         None => Ok(()),
                     }
                 },

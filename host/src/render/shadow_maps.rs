@@ -3,9 +3,12 @@
 //! with such lights; the frame records one pass ("shadow maps") after the G-buffer:
 //!
 //! 1. the maps cleared to "no occluder" and the draw's arguments to zero;
-//! 2. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
-//!    an entry per face its bounding sphere meets within the light's radius;
-//! 3. the arguments kernel, then every entry's triangles into its face: by default one indirect
+//! 2. the faces with receivers (`shaders::shadow_receivers`, [`ShadowFaces::Receivers`]): the
+//!    G-buffer's tiles of 16² pixels as two spheres each, tested against every caster's faces;
+//!    each caster keeps the faces the frame's pixels look up;
+//! 3. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
+//!    an entry per face with receivers its bounding sphere meets within the light's radius;
+//! 4. the arguments kernel, then every entry's triangles into its face: by default one indirect
 //!    dispatch of the compute rasteriser (`shaders::shadow_raster`, a workgroup per entry), or
 //!    with [`ShadowRaster::Draw`] one indirect draw through the fixed-function rasteriser (the
 //!    two write the same texels; `docs/results/h200/shadows/` measures them side by side).
@@ -28,7 +31,9 @@ use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
 use shaders::shadow_raster::ShadowRasterParams;
 use shaders::shadow::{caster_record, ShadowParams, FACES, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
-use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_DISPATCH, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
+use shaders::layout::ClusterGrid;
+use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
+use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_DISPATCH, ARGS_FACES, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
 
 /// Texels per face side unless `--shadow-resolution` says otherwise.
 pub const DEFAULT_RESOLUTION: u32 = 256;
@@ -68,6 +73,16 @@ pub enum ShadowRaster {
     Draw,
 }
 
+/// Which faces of the casters' cube maps get triangles (`--shadow-faces`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShadowFaces {
+    /// Only faces that pixels of the frame look up (`shaders::shadow_receivers`).
+    #[default]
+    Receivers,
+    /// Every face a batch's sphere meets within the light's radius.
+    All,
+}
+
 /// The shadow maps' knobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShadowSettings {
@@ -75,11 +90,12 @@ pub struct ShadowSettings {
     pub resolution: u32,
     pub filter: ShadowFilter,
     pub raster: ShadowRaster,
+    pub faces: ShadowFaces,
 }
 
 impl Default for ShadowSettings {
     fn default() -> Self {
-        Self { resolution: DEFAULT_RESOLUTION, filter: ShadowFilter::default(), raster: ShadowRaster::default() }
+        Self { resolution: DEFAULT_RESOLUTION, filter: ShadowFilter::default(), raster: ShadowRaster::default(), faces: ShadowFaces::default() }
     }
 }
 
@@ -102,6 +118,9 @@ pub struct ShadowStats {
     /// of the scene's opaque draws per face at most (batches × 64 × 6 per caster).
     pub entries: u32,
     pub batches: usize,
+    /// Faces of the casters that pixels of the last frame looked up (all six per caster with
+    /// [`ShadowFaces::All`]).
+    pub faces_with_receivers: u32,
 }
 
 /// Checks the number of shadow-casting lights against [`MAX_CASTERS`].
@@ -116,6 +135,10 @@ pub fn check_casters(casters: usize) -> Result<()> {
 pub struct ShadowMaps {
     cull: ComputePipeline<ShadowCullParams>,
     args_pipe: ComputePipeline<ShadowCullParams>,
+    /// The receivers' tiles and faces (`None`: every face, [`ShadowFaces::All`]).
+    receivers: Option<Receivers>,
+    /// Per caster, the faces with receivers (all six set with [`ShadowFaces::All`]).
+    needed: Buffer,
     /// What writes the entries' triangles: the compute rasteriser, or the draw and its render area
     /// (`res × res`, never tested or written).
     writer: Writer,
@@ -138,13 +161,21 @@ pub struct ShadowMaps {
     rotation: Mat4,
     /// Entries of the last count, and their buffer.
     capacity: u32,
-    /// Entries the last frame's cull counted.
+    /// Entries the last frame's cull counted, and the faces with receivers it found.
     counted: u32,
+    faces: u32,
     entries: Buffer,
     /// The indirect draw's arguments and the entries counted (`shaders::shadow_cull::ARGS_WORDS`).
     args: Buffer,
     /// Slot-major, face-major, row-major distances.
     pub maps: Buffer,
+}
+
+/// [`ShadowFaces::Receivers`]' pipelines and the G-buffer's tiles (`shaders::shadow_receivers`).
+struct Receivers {
+    tiles_pipe: ComputePipeline<ReceiverParams>,
+    faces_pipe: ComputePipeline<ReceiverParams>,
+    tiles: Buffer,
 }
 
 /// [`ShadowRaster`]'s pipelines.
@@ -158,7 +189,7 @@ impl ShadowMaps {
     /// opaque `draws` of `indices` over `positions` (the position buffer's contents; `rotation`
     /// takes them to view space); `None` where no light casts shadows (nothing is made).
     #[allow(clippy::too_many_arguments)]
-    pub fn new(gpu: &Gpu, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4, casters: &[bool], lights_view: &[PointLight], settings: ShadowSettings) -> Result<Option<Self>> {
+    pub fn new(gpu: &Gpu, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4, casters: &[bool], lights_view: &[PointLight], settings: ShadowSettings, frame: (u32, u32)) -> Result<Option<Self>> {
         let ctx = &gpu.ctx;
         check_resolution(settings.resolution)?;
         let list: Vec<u32> = casters.iter().enumerate().filter(|(_, &c)| c).map(|(i, _)| i as u32).collect();
@@ -187,10 +218,28 @@ impl ShadowMaps {
                 area: Image::target(ctx, "shadow map area", settings.resolution, settings.resolution, TargetFormat::Depth32)?,
             },
         };
+        let receivers = match settings.faces {
+            ShadowFaces::Receivers => {
+                let tiles = frame.0.div_ceil(RECEIVER_TILE) as u64 * frame.1.div_ceil(RECEIVER_TILE) as u64;
+                Some(Receivers {
+                    tiles_pipe: ComputePipeline::new(ctx, &gpu.compute_module, receiver_handles::SHADOW_RECEIVER_TILES)?,
+                    faces_pipe: ComputePipeline::new(ctx, &gpu.compute_module, receiver_handles::SHADOW_RECEIVER_FACES)?,
+                    tiles: Buffer::storage(ctx, "shadow receiver tiles", 4 * TILE_WORDS as u64 * tiles)?,
+                })
+            }
+            ShadowFaces::All => None,
+        };
+        let needed = match receivers {
+            Some(_) => Buffer::storage(ctx, "shadow faces with receivers", 4 * list.len() as u64)?,
+            None => Buffer::from_slice(ctx, "shadow faces with receivers", &vec![(1u32 << FACES) - 1; list.len()])?,
+        };
         let maps = Self {
             cull: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_CULL)?,
             args_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_DRAW_ARGS)?,
             writer,
+            receivers,
+            needed,
+            faces: 0,
             settings,
             degraded_from,
             records: Buffer::from_slice(ctx, "shadow caster records", &records_cpu)?,
@@ -243,6 +292,7 @@ impl ShadowMaps {
     pub fn check_entries(&mut self) -> Result<()> {
         let args: Vec<u32> = self.args.read(ARGS_WORDS as usize)?;
         self.counted = args[ARGS_COUNTED];
+        self.faces = if self.receivers.is_some() { args[ARGS_FACES] } else { FACES * self.casters.len() as u32 };
         if args[ARGS_COUNTED] > self.capacity {
             bail!("the shadow cull counted {} entries against the {} the host counted: shadow-map triangles would be missing", args[ARGS_COUNTED], self.capacity);
         }
@@ -261,17 +311,26 @@ impl ShadowMaps {
 
     /// What `--stats` reports.
     pub fn stats(&self) -> ShadowStats {
-        ShadowStats { casters: self.casters.len(), resolution: self.settings.resolution, degraded_from: self.degraded_from, entries: self.counted, batches: self.spheres.len() }
+        ShadowStats { casters: self.casters.len(), resolution: self.settings.resolution, degraded_from: self.degraded_from, entries: self.counted, batches: self.spheres.len(), faces_with_receivers: self.faces }
     }
 
-    /// Records the pass: clear, cull, arguments, then every entry's triangles into the maps (one
-    /// indirect dispatch or one indirect draw).
-    pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry, camera: &Buffer) -> VkResult<()> {
+    /// Records the pass: clear, the faces with receivers (from the G-buffer's reversed-Z `depth`
+    /// over `grid`), cull, arguments, then every entry's triangles into the maps (one indirect
+    /// dispatch or one indirect draw).
+    pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry, camera: &Buffer, depth: &Buffer, grid: ClusterGrid) -> VkResult<()> {
         rec.fill(&self.maps, NO_OCCLUDER);
         rec.fill(&self.args, 0);
+        let casters = self.casters.len() as u32;
+        if let Some(r) = &self.receivers {
+            rec.fill(&self.needed, 0);
+            let p = ReceiverParams { grid, res: self.settings.resolution, casters, tiles_x: grid.width.div_ceil(RECEIVER_TILE), tiles_y: grid.height.div_ceil(RECEIVER_TILE) };
+            let tiles = p.tiles_x * p.tiles_y;
+            rec.dispatch_linear(&r.tiles_pipe, &[depth, &r.tiles], &p, tiles)?;
+            rec.dispatch(&r.faces_pipe, &[&r.tiles, &self.records, &self.needed, &self.args], &p, [tiles.div_ceil(TILES_PER_INVOCATION * RECEIVER_WORKGROUP), casters, 1])?;
+        }
         let batches = self.spheres.len() as u32;
-        let p = ShadowCullParams { batches, casters: self.casters.len() as u32, capacity: self.capacity, pad: 0 };
-        rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
+        let p = ShadowCullParams { batches, casters, capacity: self.capacity, pad: 0 };
+        rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args, &self.needed], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
         rec.dispatch(&self.args_pipe, &[&self.args], &p, [1, 1, 1])?;
         match &self.writer {
             Writer::Compute(raster) => {
@@ -296,7 +355,8 @@ impl ShadowMaps {
 
     /// The buffers, by name and bytes.
     pub fn buffers(&self) -> Vec<(String, u64)> {
-        [&self.slots, &self.records, &self.batches, &self.entries, &self.args, &self.maps].iter().map(|b| (b.name.clone(), b.size)).collect()
+        let tiles = self.receivers.as_ref().map(|r| &r.tiles);
+        [&self.slots, &self.records, &self.batches, &self.entries, &self.args, &self.needed, &self.maps].into_iter().chain(tiles).map(|b| (b.name.clone(), b.size)).collect()
     }
 }
 

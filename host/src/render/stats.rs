@@ -55,12 +55,14 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
             "gbuffer_bytes": frame.buffers.iter().find(|b| b.0 == "gbuffer").map(|b| b.1) })),
         // Cube shadow maps, where lights cast shadows: casters, texels per face side drawn (and
         // the requested side where the maps had to be coarser to fit), the lookup's filter, what
-        // wrote the triangles (compute kernel or draw), the maps' bytes, and the batches of 64 triangles the per-face cull drew of those it tested
+        // wrote the triangles (compute kernel or draw), which faces get them and how many had
+        // receivers in the last frame, the maps' bytes, and the batches of 64 triangles the per-face cull drew of those it tested
         // (`render::shadow_maps`).
         "shadows": frame.shadows.map(|sh| json!({
             "casters": sh.casters, "resolution": sh.resolution, "degraded_from": sh.degraded_from,
             "filter": format!("{:?}", s.shadow.filter).to_lowercase(),
             "raster": format!("{:?}", s.shadow.raster).to_lowercase(),
+            "faces": format!("{:?}", s.shadow.faces).to_lowercase(), "faces_with_receivers": sh.faces_with_receivers,
             "map_bytes": frame.buffers.iter().find(|b| b.0 == "shadow maps").map(|b| b.1),
             "batches": sh.batches, "face_batches_drawn": sh.entries,
             "face_batches_tested": sh.batches as u64 * 6 * sh.casters as u64 })),
