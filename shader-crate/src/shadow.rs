@@ -3,12 +3,14 @@
 //!
 //! Steps (host: `render/shadow_maps.rs`):
 //! 1. **Clear** every texel to [`NO_OCCLUDER`].
-//! 2. **Raster** (`shadow_cull`: batches of the scene's opaque triangles culled per face on the
-//!    GPU, then one indirect draw; fragments in [`shadow_distance_fs`]): each batch drawn into a
-//!    face `f` of a caster ([`face_clip`]) in a `res × res` viewport, and each fragment keeps the
-//!    distance from the light to its surface point with an atomic minimum on the float's bits
-//!    (non-negative floats order as their bit patterns). No depth target is tested: the minimum
-//!    is the depth test, and one draw fills every face of every caster.
+//! 2. **Raster** (`shadow_receivers`: the faces the frame's pixels look up; `shadow_cull`:
+//!    batches of the scene's opaque triangles culled per face on the GPU; then
+//!    `shadow_raster`'s compute kernel, or one indirect draw with fragments in
+//!    [`shadow_distance_fs`]): each batch written into a face `f` of a caster ([`face_clip`]) of
+//!    `res × res` texels, each covered texel keeping the distance from the light to the surface
+//!    along the texel centre's ray with an atomic minimum on the float's bits (non-negative
+//!    floats order as their bit patterns). No depth target is tested: the minimum is the depth
+//!    test, and one dispatch or draw fills every face of every caster.
 //! 3. **Lookup** ([`CubeShadows::visibility`], in the shading loop of every technique that
 //!    renders shadows, `shading::shade_lights_with`): the receiver's face and texel, its distance
 //!    compared with the stored one, one texel or the bilinear weights of four

@@ -22,7 +22,9 @@
 //! and `--stats` and `render` say so ([`ShadowStats::degraded_from`]); no caster is dropped.
 //!
 //! Memory: the maps (`shaders::shadow`), 32 B per batch (0.5 B per triangle), 8 B per entry
-//! (counted on the host when the lights or the camera move: [`count_entries`]), 16 B per caster.
+//! (counted on the host when the lights or the camera move: [`count_entries`], an upper bound
+//! that ignores the receivers), 16 B per caster record and 4 B per caster of faces with
+//! receivers, 32 B per 16² pixels of receiver tiles.
 use super::gbuffer::{Draw, Geometry};
 use crate::gpu::Gpu;
 use crate::vk::{Attachment, Binding, Buffer, ComputePipeline, Context, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
