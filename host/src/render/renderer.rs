@@ -372,7 +372,7 @@ impl Renderer {
         let aspect = r.settings.width as f32 / r.settings.height as f32;
         r.camera.write(&[gbuffer::raster_camera(view.rotation(), r.fov_y_radians, aspect, r.near)])?;
         if let Some(sh) = &mut r.shadows {
-            sh.view_moved(&relative, &r.indices, &r.geometry.draws, view.rotation())?;
+            sh.view_moved(&relative, view.rotation())?;
         }
         let spots = r.spots.clone();
         self.set_lights(gpu, world_lights, &spots)

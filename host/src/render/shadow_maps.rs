@@ -21,7 +21,8 @@
 //! maps would pass the device's largest storage binding, the resolution halves until they fit,
 //! and `--stats` and `render` say so ([`ShadowStats::degraded_from`]); no caster is dropped.
 //!
-//! Memory: the maps (`shaders::shadow`), 32 B per batch (0.5 B per triangle), 8 B per entry
+//! Memory: the maps (`shaders::shadow`), 12 B per opaque triangle (its indices in the batches'
+//! order, [`shadow_triangles`]), 32 B per batch (0.5 B per triangle), 8 B per entry
 //! (counted on the host when the lights or the camera move: [`count_entries`], an upper bound
 //! that ignores the receivers), 16 B per caster record and 4 B per caster of faces with
 //! receivers, 32 B per 16² pixels of receiver tiles.
@@ -159,6 +160,10 @@ pub struct ShadowMaps {
     /// the position buffer's space (relative to the eye).
     batches: Buffer,
     spheres: Vec<[f32; 4]>,
+    /// The opaque triangles' indices in the batches' order ([`shadow_triangles`]), on the GPU and
+    /// the host.
+    indices: Buffer,
+    order: Vec<u32>,
     /// The view's rotation (position-buffer space → view space).
     rotation: Mat4,
     /// Entries of the last count, and their buffer.
@@ -210,7 +215,8 @@ impl ShadowMaps {
         for (slot, &l) in list.iter().enumerate() {
             slots[(SHADOW_HEADER_WORDS + l) as usize] = slot as u32;
         }
-        let (batch_words, spheres) = batches(positions, indices, draws);
+        let order = shadow_triangles(positions, indices, draws);
+        let (batch_words, spheres) = batches(positions, &order);
         let records_cpu = records(&list, lights_view);
         let capacity = entry_capacity(ctx, &spheres, rotation, &records_cpu)?;
         let writer = match settings.raster {
@@ -249,6 +255,8 @@ impl ShadowMaps {
             casters: list,
             slots: Buffer::from_slice(ctx, "shadow slots", &slots)?,
             batches: Buffer::from_slice(ctx, "shadow batches", &batch_words)?,
+            indices: Buffer::from_slice(ctx, "shadow batch indices", &order)?,
+            order,
             spheres,
             rotation,
             capacity,
@@ -272,9 +280,10 @@ impl ShadowMaps {
     }
 
     /// The position buffer's contents moved (the eye moved) and the view turned: the batches'
-    /// spheres anew. The caller moves the lights next ([`ShadowMaps::lights_moved`]).
-    pub fn view_moved(&mut self, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4) -> Result<()> {
-        let (words, spheres) = batches(positions, indices, draws);
+    /// spheres anew (the same triangles in each). The caller moves the lights next
+    /// ([`ShadowMaps::lights_moved`]).
+    pub fn view_moved(&mut self, positions: &[[f32; 3]], rotation: Mat4) -> Result<()> {
+        let (words, spheres) = batches(positions, &self.order);
         self.batches.write(&words).context("uploading the shadow batches")?;
         (self.spheres, self.rotation) = (spheres, rotation);
         Ok(())
@@ -337,7 +346,7 @@ impl ShadowMaps {
         match &self.writer {
             Writer::Compute(raster) => {
                 let params = ShadowRasterParams { res: self.settings.resolution, capacity: self.capacity, pad: [0; 2] };
-                let buffers = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.args, &self.maps];
+                let buffers = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.args, &self.maps];
                 rec.dispatch_indirect(raster, &buffers, &params, &self.args, ARGS_DISPATCH)?;
             }
             Writer::Draw { pipe, area } => {
@@ -345,7 +354,7 @@ impl ShadowMaps {
                 rec.fragments_read_earlier_writes();
                 rec.transition(area, ImageUse::Undefined, ImageUse::DepthTarget);
                 rec.begin_drawing(&[], Attachment { image: area, load: Load::ClearDepth(0.0) });
-                let bindings = [&geometry.positions, &geometry.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
+                let bindings = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
                 let params = ShadowParams { res: self.settings.resolution, pad: [0; 3] };
                 rec.draw_indirect(pipe, &bindings, &params, &self.args)?;
                 rec.end_rendering();
@@ -358,7 +367,7 @@ impl ShadowMaps {
     /// The buffers, by name and bytes.
     pub fn buffers(&self) -> Vec<(String, u64)> {
         let tiles = self.receivers.as_ref().map(|r| &r.tiles);
-        [&self.slots, &self.records, &self.batches, &self.entries, &self.args, &self.needed, &self.maps].into_iter().chain(tiles).map(|b| (b.name.clone(), b.size)).collect()
+        [&self.slots, &self.records, &self.batches, &self.indices, &self.entries, &self.args, &self.needed, &self.maps].into_iter().chain(tiles).map(|b| (b.name.clone(), b.size)).collect()
     }
 }
 
@@ -374,21 +383,33 @@ fn fitting_resolution(ctx: &Context, requested: u32, casters: usize) -> Result<(
     Ok((res, bytes(res)))
 }
 
-/// The opaque draws' triangles in batches of [`BATCH_TRIANGLES`] (`shaders::shadow_cull`): the
+/// The opaque draws' triangles (the indices of each, three per triangle) in the Morton order of
+/// their centroids over the scene's box: consecutive triangles lie near each other wherever the
+/// meshes' own order scatters them, so each batch of [`BATCH_TRIANGLES`] has a small sphere.
+/// (Alpha-tested triangles occlude whole, as in the draw order.)
+fn shadow_triangles(positions: &[[f32; 3]], indices: &[u32], draws: &[Draw]) -> Vec<u32> {
+    let tris: Vec<[u32; 3]> = draws.iter().filter(|d| d.indirect.is_none()).flat_map(|d| indices[d.first_index as usize..(d.first_index + d.index_count) as usize].chunks_exact(3).map(|t| [t[0], t[1], t[2]])).collect();
+    let centroid = |t: &[u32; 3]| t.iter().fold(Vec3::ZERO, |c, &i| c + Vec3::from_array(positions[i as usize])) / 3.0;
+    let (lo, hi) = tris.iter().map(centroid).fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let q = shaders::morton::MortonQuantizer::new(lo.to_array(), hi.to_array(), shaders::morton::MORTON30_BITS);
+    let mut keyed: Vec<(u32, usize)> = tris.iter().enumerate().map(|(k, t)| (q.morton30_of(centroid(t).to_array()), k)).collect();
+    keyed.sort_unstable();
+    keyed.into_iter().flat_map(|(_, k)| tris[k]).collect()
+}
+
+/// Batches of [`BATCH_TRIANGLES`] consecutive triangles of `order` (`shaders::shadow_cull`): the
 /// batch words and each batch's bounding sphere (box centre, half diagonal).
-fn batches(positions: &[[f32; 3]], indices: &[u32], draws: &[Draw]) -> (Vec<u32>, Vec<[f32; 4]>) {
+fn batches(positions: &[[f32; 3]], order: &[u32]) -> (Vec<u32>, Vec<[f32; 4]>) {
     let (mut words, mut spheres) = (vec![], vec![]);
-    for d in draws.iter().filter(|d| d.indirect.is_none()) {
-        let triangles = d.index_count / 3;
-        for first in (0..triangles).step_by(BATCH_TRIANGLES as usize) {
-            let count = BATCH_TRIANGLES.min(triangles - first);
-            let start = (d.first_index + 3 * first) as usize;
-            let corners = indices[start..start + 3 * count as usize].iter().map(|&i| Vec3::from_array(positions[i as usize]));
-            let (lo, hi) = corners.fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)));
-            let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
-            words.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), start as u32, count, 0, 0]);
-            spheres.push([c.x, c.y, c.z, r]);
-        }
+    let triangles = (order.len() / 3) as u32;
+    for first in (0..triangles).step_by(BATCH_TRIANGLES as usize) {
+        let count = BATCH_TRIANGLES.min(triangles - first);
+        let start = 3 * first as usize;
+        let corners = order[start..start + 3 * count as usize].iter().map(|&i| Vec3::from_array(positions[i as usize]));
+        let (lo, hi) = corners.fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+        words.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), start as u32, count, 0, 0]);
+        spheres.push([c.x, c.y, c.z, r]);
     }
     debug_assert_eq!(words.len(), spheres.len() * BATCH_WORDS as usize);
     (words, spheres)
