@@ -220,6 +220,7 @@ pub fn batch_vertex(v: u32, positions: &[f32], indices: &[u32], view: Mat4, cast
 /// Step 1: invocation (batch, caster) = (global x, workgroup y).
 #[cfg(feature = "compute")]
 #[spirv(compute(threads(64)))]
+#[allow(clippy::too_many_arguments)]
 pub fn shadow_cull(
     #[spirv(global_invocation_id)] id: glam::UVec3,
     #[spirv(push_constant)] p: &ShadowCullParams,
