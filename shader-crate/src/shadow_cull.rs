@@ -283,4 +283,4 @@ pub mod handles {
 
 #[cfg(test)]
 #[path = "shadow_cull_tests.rs"]
-mod tests;
+pub(crate) mod tests;

@@ -2,6 +2,21 @@ use super::*;
 use crate::shadow::{cube_face, CASTER_WORDS};
 use crate::test_support::Rng;
 
+/// The batch words (`BATCH_WORDS` each) of `n_tris` triangles stored corner after corner in
+/// `positions` and indexed in order: batches of [`BATCH_TRIANGLES`], each bounded by its box's
+/// sphere, the last one partial.
+pub(crate) fn batch_words(positions: &[f32], n_tris: u32) -> Vec<u32> {
+    let mut batches = vec![];
+    for first in (0..n_tris).step_by(BATCH_TRIANGLES as usize) {
+        let count = BATCH_TRIANGLES.min(n_tris - first);
+        let pts: Vec<Vec3> = (3 * first..3 * (first + count)).map(|i| crate::raster::fetch3(positions, i as usize)).collect();
+        let (lo, hi) = pts.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+        batches.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), 3 * first, count, 0, 0]);
+    }
+    batches
+}
+
 fn range(rng: &mut Rng, a: f32, b: f32) -> f32 {
     a + (b - a) * rng.unit()
 }
@@ -71,16 +86,8 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
         }
     }
     let indices: Vec<u32> = (0..3 * n_tris).collect();
-    let mut batches = vec![];
     let n_batches = n_tris.div_ceil(BATCH_TRIANGLES);
-    for b in 0..n_batches {
-        let first = b * BATCH_TRIANGLES;
-        let count = BATCH_TRIANGLES.min(n_tris - first);
-        let pts: Vec<Vec3> = (3 * first..3 * (first + count)).map(|i| crate::raster::fetch3(&positions, i as usize)).collect();
-        let (lo, hi) = pts.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
-        batches.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), 3 * first, count, 0, 0]);
-    }
+    let batches = batch_words(&positions, n_tris);
     // A rotation as the camera's view.
     let view = Mat4::from_rotation_y(0.7) * Mat4::from_rotation_x(-0.3);
     let lights: Vec<(Vec3, f32)> = (0..6).map(|_| (Vec3::new(range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0)), range(&mut rng, 2.0, 7.0))).collect();

@@ -1,6 +1,7 @@
 use super::*;
 use crate::coop::cpu::{run_workgroups, Emulation};
 use crate::shadow::{cube_face, NO_OCCLUDER};
+use crate::shadow_cull::tests::batch_words;
 use crate::shadow_cull::{cull_batch, draw_args, ShadowCullParams, ARGS_DISPATCH, ARGS_WORDS};
 use crate::test_support::Rng;
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -176,15 +177,7 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     }
     let indices: Vec<u32> = (0..3 * n_tris).collect();
     let n_batches = n_tris.div_ceil(BATCH_TRIANGLES);
-    let mut batches = vec![];
-    for b in 0..n_batches {
-        let first = b * BATCH_TRIANGLES;
-        let count = BATCH_TRIANGLES.min(n_tris - first);
-        let pts: Vec<Vec3> = (3 * first..3 * (first + count)).map(|i| crate::raster::fetch3(&positions, i as usize)).collect();
-        let (lo, hi) = pts.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
-        batches.extend_from_slice(&[c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), r.to_bits(), 3 * first, count, 0, 0]);
-    }
+    let batches = batch_words(&positions, n_tris);
     let view = Mat4::from_rotation_z(0.4) * Mat4::from_rotation_x(1.1);
     let lights: Vec<(Vec3, f32)> = (0..4).map(|_| (random_vec(&mut rng, 3.0), range(&mut rng, 3.0, 9.0))).collect();
     let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r]).collect();
