@@ -383,8 +383,8 @@ fn techniques_without_shadows_refuse_shadow_casting_lights() {
 
 /// The command line: `deferred` renders a description with a shadow-casting light, a technique
 /// without shadows refuses it (status 2, one line); `--shadow-reference` shades the ray-cast
-/// reference; `--shadow-fraction` marks generated lights; bad knobs and what the reference cannot
-/// take are refused.
+/// reference; `--shadow-fraction` marks generated lights and `--shadows all` a scene's own; bad
+/// knobs and what the reference cannot take are refused.
 #[test]
 fn render_draws_shadows_or_refuses_them() {
     let dir = TempDir::new("shadow-cli");
@@ -422,6 +422,13 @@ fn render_draws_shadows_or_refuses_them() {
     assert!(r.stderr.contains("shadow reference: 1 of 1 lights cast shadows"), "{}", r.stderr);
     assert!(out.exists());
     assert_refused(&run("deferred", &["--shadow-fraction", "0.5"]), "--shadow-fraction with the scene's own lights", BAD_INPUT, &["--shadow-fraction applies to the --lights"]);
+    // --shadows all marks the scene's own lights (here a description without `shadows = true`).
+    let r = manylights_env(["render", "--scene", plain.to_str().unwrap(), "--shadows", "all", "--width", "64", "--height", "48", "--frames", "0", "--out", out.to_str().unwrap(), "--stats", json.to_str().unwrap()], &[]);
+    assert!(r.ok, "{}", r.stderr);
+    let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(stats["shadows"]["casters"].as_u64(), Some(1), "{}", stats["shadows"]);
+    let both = ["render", "--scene", "city", "--lights", "40", "--shadow-fraction", "0.5", "--shadows", "all", "--width", "64", "--height", "48", "--frames", "0", "--out", out.to_str().unwrap()];
+    assert_refused(&manylights_env(both, &[]), "--shadows all beside a fraction", BAD_INPUT, &["--shadows all and --shadow-fraction 0.5"]);
     let generated = |technique: &str, fraction: &str| {
         let args = ["render", "--scene", "city", "--technique", technique, "--lights", "40", "--shadow-fraction", fraction, "--width", "64", "--height", "48", "--frames", "0", "--out", out.to_str().unwrap()];
         manylights_env(args, &[])

@@ -52,6 +52,11 @@ pub struct RenderArgs {
     /// Techniques that render shadows (cube shadow maps) draw them; the others refuse.
     #[arg(long, default_value_t = 0.0, value_parser = parse_fraction, allow_negative_numbers = true)]
     pub shadow_fraction: f32,
+    /// `--shadows all`: every point and spot light of the scene casts shadows — its own lights
+    /// (a description's or a glTF file's) as well as generated ones; the default, `listed`,
+    /// keeps what the scene and `--shadow-fraction` say.
+    #[arg(long, value_enum, default_value_t = ShadowCasters::Listed)]
+    pub shadows: ShadowCasters,
     /// Texels per side of each face of a shadow-casting light's cube shadow map (1..=4096;
     /// 24 · N² bytes per shadow-casting light).
     #[arg(long, default_value_t = crate::render::shadow_maps::DEFAULT_RESOLUTION)]
@@ -222,6 +227,30 @@ fn check_description(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     }
 }
 
+/// Which lights cast shadows (`--shadows`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ShadowCasters {
+    /// Those the scene marks, and the `--shadow-fraction` of generated lights.
+    #[default]
+    Listed,
+    /// Every point and spot light.
+    All,
+}
+
+/// `--shadows all`: marks every light of `scene` as a caster; refused in one line beside a
+/// `--shadow-fraction`, which it would override.
+pub fn apply_shadow_casters(scene: &mut Scene, a: &RenderArgs) -> Result<()> {
+    if a.shadows == ShadowCasters::All {
+        if a.shadow_fraction > 0.0 {
+            bail_input!("--shadows all and --shadow-fraction {}: every light casts with the first, a share with the second; give one", a.shadow_fraction);
+        }
+        for i in 0..scene.lights.len() {
+            scene.set_casts_shadows(i, true);
+        }
+    }
+    Ok(())
+}
+
 pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     check_args(gpu, a)?;
     check_description(gpu, a)?;
@@ -247,8 +276,9 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
     } else if a.spot_fraction > 0.0 {
         bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)");
     } else if a.shadow_fraction > 0.0 {
-        bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description)");
+        bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description, or --shadows all)");
     }
+    apply_shadow_casters(&mut scene, a)?;
     if let Some(t) = a.time {
         scene.lights = lights::animate(&scene.lights, t);
     }

@@ -73,6 +73,7 @@ impl Viewer {
         // The lights as `render` makes them (with their cones in `scene.spots` and their shadow
         // flags in `scene.shadows`).
         let mut shadow_share = None;
+        let generated = scene.lights.is_empty();
         let spot_share = match scene.lights.is_empty() {
             true => {
                 if a.lights == 0 {
@@ -91,13 +92,18 @@ impl Viewer {
                 (a.spot_fraction > 0.0).then_some(share)
             }
             false if a.shadow_fraction > 0.0 => {
-                crate::bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description)")
+                crate::bail_input!("--shadow-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] shadow_fraction or shadows = true in its description, or --shadows all)")
             }
             false if a.spot_fraction > 0.0 => {
                 crate::bail_input!("--spot-fraction applies to the --lights the command generates; this scene has its own lights (use [lights] spot_fraction in its description)")
             }
             false => scene.spot_share,
         };
+        crate::render_cmd::apply_shadow_casters(&mut scene, a)?;
+        if a.shadows == crate::render_cmd::ShadowCasters::All && generated {
+            // Generated lights keep every light a caster when + and − make them anew.
+            shadow_share = Some(1.0);
+        }
         if let Some(level) = a.tess_level {
             scene.set_tess_level(level);
         }
