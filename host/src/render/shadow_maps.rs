@@ -389,10 +389,10 @@ fn fitting_resolution(ctx: &Context, requested: u32, casters: usize) -> Result<(
 /// (Alpha-tested triangles occlude whole, as in the draw order.)
 fn shadow_triangles(positions: &[[f32; 3]], indices: &[u32], draws: &[Draw]) -> Vec<u32> {
     let tris: Vec<[u32; 3]> = draws.iter().filter(|d| d.indirect.is_none()).flat_map(|d| indices[d.first_index as usize..(d.first_index + d.index_count) as usize].chunks_exact(3).map(|t| [t[0], t[1], t[2]])).collect();
-    let centroid = |t: &[u32; 3]| t.iter().fold(Vec3::ZERO, |c, &i| c + Vec3::from_array(positions[i as usize])) / 3.0;
-    let (lo, hi) = tris.iter().map(centroid).fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), c| (lo.min(c), hi.max(c)));
+    let centroids: Vec<Vec3> = tris.iter().map(|t| t.iter().fold(Vec3::ZERO, |c, &i| c + Vec3::from_array(positions[i as usize])) / 3.0).collect();
+    let (lo, hi) = centroids.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &c| (lo.min(c), hi.max(c)));
     let q = shaders::morton::MortonQuantizer::new(lo.to_array(), hi.to_array(), shaders::morton::MORTON30_BITS);
-    let mut keyed: Vec<(u32, usize)> = tris.iter().enumerate().map(|(k, t)| (q.morton30_of(centroid(t).to_array()), k)).collect();
+    let mut keyed: Vec<(u32, usize)> = centroids.iter().enumerate().map(|(k, c)| (q.morton30_of(c.to_array()), k)).collect();
     keyed.sort_unstable();
     keyed.into_iter().flat_map(|(_, k)| tris[k]).collect()
 }
