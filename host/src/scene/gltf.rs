@@ -24,7 +24,9 @@
 //!    which an unwindowed light would change no 8-bit pixel at exposure 1. A spot light is the
 //!    same point light plus its cone ([`Spot`]): the node's −z axis, `innerConeAngle` and
 //!    `outerConeAngle`; a directional light ([`Directional`]) the node's −z axis, colour and
-//!    intensity. A cone out of glTF's range is an error naming the light.
+//!    intensity. A cone out of glTF's range is an error naming the light. A point or spot light
+//!    whose `extras` hold `"shadows": true` casts shadows (`--shadows all` marks every one); on a
+//!    directional light, or with a value other than a boolean, it is an error naming the light.
 //! 5. **Ignored with one warning line each** (per file and feature): skins, morph targets,
 //!    animations, orthographic cameras, extensions the importer does not know, images that do
 //!    not decode; non-triangle primitives (one line each). Primitives compressed with
@@ -58,6 +60,8 @@ struct Gather<'a> {
     buffers: &'a [gltf::buffer::Data],
     meshes: Vec<Mesh>,
     lights: Vec<(PointLight, Option<Spot>)>,
+    /// Per light of `lights`: its `extras` mark it as casting shadows (step 4).
+    shadows: Vec<bool>,
     directional: Vec<Directional>,
     camera: Option<Camera>,
     warnings: Vec<String>,
@@ -76,6 +80,18 @@ struct Gather<'a> {
 const DRACO: &str = "KHR_draco_mesh_compression";
 /// Extensions read (or harmless to ignore) without a warning.
 const KNOWN_EXTENSIONS: [&str; 3] = ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
+
+/// The light's `extras` (step 4): `{"shadows": true}` marks it as casting shadows; absent extras,
+/// an object without the key or `false` leave it unshadowed; anything else is an error.
+fn shadow_flag(extras: Option<&str>) -> Result<bool, String> {
+    let Some(raw) = extras else { return Ok(false) };
+    let value: serde_json::Value = serde_json::from_str(raw).map_err(|e| format!("not JSON ({e})"))?;
+    match value.get("shadows") {
+        None => Ok(false),
+        Some(serde_json::Value::Bool(b)) => Ok(*b),
+        Some(other) => Err(format!("\"shadows\" must be true or false, not {other}")),
+    }
+}
 
 /// Loads a `.gltf` or `.glb` file. Every error is one line naming the file (step 6).
 pub fn load(path: &Path) -> Result<Scene> {
@@ -263,7 +279,7 @@ fn load_checked(path: &Path) -> Result<Scene> {
     materials.push(Material::diffuse("default", [1.0; 3]));
 
     let draco = doc.extensions_used().any(|e| e == DRACO) || doc.extensions_required().any(|e| e == DRACO);
-    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
+    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), shadows: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
     let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {}: scenes: the document lists no scene to draw", path.display()))?;
     for node in scene.nodes() {
         visit(&mut g, &node, Mat4::IDENTITY, 0, path)?;
@@ -293,7 +309,11 @@ fn load_checked(path: &Path) -> Result<Scene> {
         None => super::obj::default_camera(bounds),
     };
     let mut scene = Scene::new(&name, g.meshes, materials, textures, camera);
+    let first = scene.lights.len();
     scene.add_lights(g.lights);
+    for (i, _) in g.shadows.iter().enumerate().filter(|(_, &s)| s) {
+        scene.set_casts_shadows(first + i, true);
+    }
     scene.directional = g.directional;
     scene.warnings = g.warnings;
     Ok(scene)
@@ -374,15 +394,24 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, depth: usize, 
         let what = label("light", light.index(), light.name());
         let (colour, intensity) = (light.color(), light.intensity());
         let forward = world.transform_vector3(Vec3::NEG_Z);
+        let shadows = shadow_flag(light.extras().as_deref().map(|r| r.get()))
+            .map_err(|e| anyhow!("glTF file {}: {what}: extras: {e}", path.display()))?;
         let point = || PointLight { position: origin.to_array(), radius: light.range().unwrap_or_else(|| radius_without_range(intensity, colour)), colour, intensity };
         match light.kind() {
-            gltf::khr_lights_punctual::Kind::Point => g.lights.push((point(), None)),
+            gltf::khr_lights_punctual::Kind::Point => {
+                g.lights.push((point(), None));
+                g.shadows.push(shadows);
+            }
             gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                 let spot = Spot { direction: forward, inner: inner_cone_angle, outer: outer_cone_angle };
                 crate::render::light_types::check_spot(&format!("glTF file {}: {what}", path.display()), &spot)?;
                 g.lights.push((point(), Some(spot)));
+                g.shadows.push(shadows);
             }
             gltf::khr_lights_punctual::Kind::Directional => {
+                if shadows {
+                    bail!("glTF file {}: {what}: extras: \"shadows\": directional lights cast no shadows here (point and spot lights do)", path.display());
+                }
                 let d = Directional { direction: forward, colour, intensity };
                 crate::render::light_types::check_directional(&format!("glTF file {}: {what}", path.display()), &d)?;
                 g.directional.push(d);

@@ -157,6 +157,33 @@ fn gltf_refusals_name_the_file_and_what() {
     assert!(e.contains("nobin.gltf") && !e.contains('\n'), "{e}");
 }
 
+/// A light's `extras` `{"shadows": true}` marks it as casting shadows: only that light, a point
+/// or a spot; `false`, other keys or no extras leave lights unshadowed (and the scene allocates
+/// nothing for shadows); a non-boolean value or a shadowed directional light is refused in one line.
+#[test]
+fn gltf_light_extras_mark_shadow_casters() {
+    let dir = TempDir::new("gltf-shadows");
+    write_leaf(&dir);
+    std::fs::write(dir.0.join("tri.bin"), triangle_bin()).unwrap();
+    let with = |name: &str, light: &str| dir.write(name, &document(Some("tri.bin"), light).replace(r#""light": 1}}"#, r#""light": 2}}"#));
+    let spot = |extras: &str| format!(r#"{{"type": "spot", "name": "torch", "spot": {{"outerConeAngle": 0.5}}, "extras": {extras}}}"#);
+    let s = load(&with("casts.gltf", &spot(r#"{"shadows": true, "note": 1}"#)));
+    assert_eq!((s.shadows.as_slice(), s.shadow_casters()), (&[false, true][..], 1));
+    assert!(s.spots[1].is_some());
+    let point = r#"{"type": "point", "intensity": 2, "extras": {"shadows": true}}"#;
+    assert_eq!(load(&with("point.gltf", point)).shadows, [false, true]);
+    for (name, extras) in [("off.gltf", r#"{"shadows": false}"#), ("other.gltf", r#"{"owner": "x"}"#), ("null.gltf", "null")] {
+        let s = load(&with(name, &spot(extras)));
+        assert_eq!(s.shadow_casters(), 0, "{name}");
+    }
+    assert!(load(&with("none.gltf", POINT)).shadows.is_empty());
+    let e = load_err(&with("word.gltf", &spot(r#"{"shadows": "yes"}"#)));
+    assert!(e.contains("word.gltf") && e.contains("light 2 (\"torch\")") && e.contains(r#""shadows" must be true or false, not "yes""#) && !e.contains('\n'), "{e}");
+    let sun = r#"{"type": "directional", "name": "sun", "extras": {"shadows": true}}"#;
+    let e = load_err(&with("sun.gltf", sun));
+    assert!(e.contains("sun.gltf") && e.contains("directional lights cast no shadows") && !e.contains('\n'), "{e}");
+}
+
 /// `MASK` without a texture: the factor's alpha alone against `alphaCutoff` — below it the whole
 /// material is cut out (a 1×1 mask of 0), at or above it nothing is.
 #[test]
