@@ -280,7 +280,8 @@ impl LightList for LightRange {
     }
 }
 
-/// A Forward+ tile list: node `k` is `(light, next)` at words `2k`, `2k + 1`; [`NO_NODE`] ends it.
+/// A Forward+ tile list: node `k` is `(light, next)` at words `2k`, `2k + 1`; [`NO_NODE`] ends it,
+/// and so does a node that names itself as its next (never written; see its `step`).
 /// The position is the node.
 pub struct LinkedLights<'a> {
     head: u32,
@@ -305,7 +306,12 @@ impl LightList for LinkedLights<'_> {
             return (NO_LIGHT, node);
         }
         let k = 2 * node as usize;
-        (self.nodes[k], self.nodes[k + 1])
+        let next = self.nodes[k + 1];
+        // A node never follows itself: each push takes a fresh node and links it to the
+        // previous head. An invocation that reads zeros — what lavapipe's fragment loop loads
+        // for the lanes it carries with their mask off — sees node 0 follow itself: it ends
+        // there instead of walking to the driver's loop limit (65 535 iterations per block).
+        (self.nodes[k], if next == node { NO_NODE } else { next })
     }
 }
 

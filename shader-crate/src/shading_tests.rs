@@ -232,6 +232,9 @@ fn spots_and_directional_lights_follow_the_model() {
         let nodes: Vec<u32> = (0..n).flat_map(|l| [l, if l + 1 < n { l + 1 } else { NO_NODE }]).collect();
         shade_lights::<true, false, _>(s, effects, n, &buffer, &linked_lights(0, &nodes), &mut linked);
         assert_eq!(linked, expected, "cone falloff, one light per iteration");
+        // Zeros (a lane whose loads are masked off): node 0 follows itself and the walk ends.
+        let zeros = vec![0u32; nodes.len()];
+        assert_eq!(shade_lights::<true, false, _>(s, effects, n, &buffer, &linked_lights(0, &zeros), &mut Vec3::ZERO), 1, "a self-linked node ends the list");
         cut |= expected.cmplt(direct(s, &lights, effects)).any();
         for &(d, c, i) in &dirs {
             expected += crate::lighting::shade_directional::<true>(s.pos, s.normal, s.albedo, s.specular, s.roughness, d, Vec3::from_array(c), i, effects);
