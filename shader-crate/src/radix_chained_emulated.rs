@@ -86,10 +86,14 @@ impl Board {
         self.occupancy.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Stores word `i` and wakes the blocked workgroups, if any: a waiter checks the word and
+    /// counts itself blocked under the lock taken here after the store, so it either saw the
+    /// word or is counted. (Waking nobody saves a futex call per publish: 256 per tile.)
     pub fn publish(&self, i: u32, v: u32) {
         self.words[i as usize].store(v, Ordering::SeqCst);
-        let _o = self.occupancy();
-        self.changed.notify_all();
+        if self.occupancy().blocked > 0 {
+            self.changed.notify_all();
+        }
     }
 
     /// Word `i` once `ready` holds for it; blocks while it does not, and panics when no

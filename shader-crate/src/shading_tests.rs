@@ -234,7 +234,7 @@ fn spots_and_directional_lights_follow_the_model() {
         assert_eq!(linked, expected, "cone falloff, one light per iteration");
         // Zeros (a lane whose loads are masked off): node 0 follows itself and the walk ends.
         let zeros = vec![0u32; nodes.len()];
-        assert_eq!(shade_lights::<true, false, _>(s, effects, n, &buffer, &linked_lights(0, &zeros), &mut Vec3::ZERO), 1, "a self-linked node ends the list");
+        assert_eq!(shade_lights::<true, false, _>(s, effects, n, &buffer, &linked_lights(0, &zeros), &mut Vec3::default()), 1, "a self-linked node ends the list");
         cut |= expected.cmplt(direct(s, &lights, effects)).any();
         for &(d, c, i) in &dirs {
             expected += crate::lighting::shade_directional::<true>(s.pos, s.normal, s.albedo, s.specular, s.roughness, d, Vec3::from_array(c), i, effects);
