@@ -60,8 +60,8 @@ struct Gather<'a> {
     buffers: &'a [gltf::buffer::Data],
     meshes: Vec<Mesh>,
     lights: Vec<(PointLight, Option<Spot>)>,
-    /// Per light of `lights`: its `extras` mark it as casting shadows (step 4).
-    shadows: Vec<bool>,
+    /// Indices into `lights` of those whose `extras` mark them as casting shadows (step 4).
+    casters: Vec<usize>,
     directional: Vec<Directional>,
     camera: Option<Camera>,
     warnings: Vec<String>,
@@ -279,7 +279,7 @@ fn load_checked(path: &Path) -> Result<Scene> {
     materials.push(Material::diffuse("default", [1.0; 3]));
 
     let draco = doc.extensions_used().any(|e| e == DRACO) || doc.extensions_required().any(|e| e == DRACO);
-    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), shadows: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
+    let mut g = Gather { buffers: &buffers, meshes: Vec::new(), lights: Vec::new(), casters: Vec::new(), directional: Vec::new(), camera: None, warnings, default_material, draco, skipped_draco: 0, morphed: 0, nodes: doc.nodes().count() };
     let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| anyhow!("glTF file {}: scenes: the document lists no scene to draw", path.display()))?;
     for node in scene.nodes() {
         visit(&mut g, &node, Mat4::IDENTITY, 0, path)?;
@@ -309,10 +309,9 @@ fn load_checked(path: &Path) -> Result<Scene> {
         None => super::obj::default_camera(bounds),
     };
     let mut scene = Scene::new(&name, g.meshes, materials, textures, camera);
-    let first = scene.lights.len();
     scene.add_lights(g.lights);
-    for (i, _) in g.shadows.iter().enumerate().filter(|(_, &s)| s) {
-        scene.set_casts_shadows(first + i, true);
+    for i in g.casters {
+        scene.set_casts_shadows(i, true);
     }
     scene.directional = g.directional;
     scene.warnings = g.warnings;
@@ -398,15 +397,11 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, depth: usize, 
             .map_err(|e| anyhow!("glTF file {}: {what}: extras: {e}", path.display()))?;
         let point = || PointLight { position: origin.to_array(), radius: light.range().unwrap_or_else(|| radius_without_range(intensity, colour)), colour, intensity };
         match light.kind() {
-            gltf::khr_lights_punctual::Kind::Point => {
-                g.lights.push((point(), None));
-                g.shadows.push(shadows);
-            }
+            gltf::khr_lights_punctual::Kind::Point => g.lights.push((point(), None)),
             gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
                 let spot = Spot { direction: forward, inner: inner_cone_angle, outer: outer_cone_angle };
                 crate::render::light_types::check_spot(&format!("glTF file {}: {what}", path.display()), &spot)?;
                 g.lights.push((point(), Some(spot)));
-                g.shadows.push(shadows);
             }
             gltf::khr_lights_punctual::Kind::Directional => {
                 if shadows {
@@ -416,6 +411,10 @@ fn visit(g: &mut Gather<'_>, node: &gltf::Node<'_>, parent: Mat4, depth: usize, 
                 crate::render::light_types::check_directional(&format!("glTF file {}: {what}", path.display()), &d)?;
                 g.directional.push(d);
             }
+        }
+        // Only a point or spot light gets here with the flag (a directional one was refused).
+        if shadows {
+            g.casters.push(g.lights.len() - 1);
         }
     }
     for child in node.children() {
