@@ -51,6 +51,7 @@ fn settings(technique: Technique, read_back: bool) -> Settings {
         frames: 1,
         read_back,
         bvh_branching: 0,
+        morton_bits: 0,
         async_compute: false,
         sort: Default::default(),
         fp_lists: Default::default(),

@@ -50,6 +50,7 @@ fn cut_lights(scene: &Scene) -> Vec<PointLight> {
 fn settings(technique: Technique, read_back: bool) -> Settings {
     Settings {
         bvh_branching: 0,
+        morton_bits: 0,
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),

@@ -55,17 +55,20 @@ fn assert_equal_to_reference_with(gpu: &Gpu, scene: &Scene, lights: &[PointLight
     let reference = frame(gpu, scene, lights, &settings(w, h, Technique::Deferred));
     let mut frames = Vec::new();
     let (tiles, pages) = (UniqueClusters::Tiles, UniqueClusters::PageTable);
+    // (technique, branching, sort, unique clusters, Morton bits per axis; 0: the default)
     let runs = [
-        (Technique::ClusteredNaive, 0, SortKind::Radix, tiles),
-        (Technique::ClusteredNaive, 0, SortKind::Radix, pages),
-        (Technique::ClusteredBvh, 32, SortKind::Radix, tiles),
-        (Technique::ClusteredBvh, 64, SortKind::Radix, pages),
-        (Technique::ClusteredBvh, 64, SortKind::Radix, tiles),
-        (Technique::ClusteredBvh, 32, SortKind::Bitonic, tiles),
+        (Technique::ClusteredNaive, 0, SortKind::Radix, tiles, 0),
+        (Technique::ClusteredNaive, 0, SortKind::Radix, pages, 0),
+        (Technique::ClusteredBvh, 32, SortKind::Radix, tiles, 0),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, pages, 0),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, tiles, 0),
+        (Technique::ClusteredBvh, 32, SortKind::Bitonic, tiles, 0),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, tiles, 8),
+        (Technique::ClusteredBvh, 64, SortKind::Radix, tiles, 2),
     ];
-    for (technique, branching, sort, unique_clusters) in runs {
-        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, unique_clusters, ..settings(w, h, technique) });
-        let run = format!("{what}, {technique:?} (branching {branching}, {sort:?} sort, {unique_clusters:?})");
+    for (technique, branching, sort, unique_clusters, morton_bits) in runs {
+        let clustered = frame(gpu, scene, lights, &Settings { bvh_branching: branching, sort, unique_clusters, morton_bits, ..settings(w, h, technique) });
+        let run = format!("{what}, {technique:?} (branching {branching}, {sort:?} sort, {unique_clusters:?}, Morton bits {morton_bits})");
         let worst = worst_channel(&reference.pixels, &clustered.pixels);
         assert!(worst <= 1, "{run}: differs from deferred by {worst}/255");
         reference::check(clustered.readback.as_ref().unwrap()).unwrap_or_else(|e| panic!("{run}: {e:#}"));
@@ -84,6 +87,14 @@ fn city_1k_and_10k_lights_equal_the_reference() {
     for n in [1_000, 10_000] {
         let l = lights::uniform(&scene, n, 7).unwrap();
         let f = assert_equal_to_reference(&gpu, &scene, &l, 192, 108, &format!("city {n}"));
+        // `--morton-bits` reaches the key kernel and the sort: 2 bits per axis (64 cells) order
+        // the lights otherwise than 10, so the clusters list them in another order (the same
+        // lights and image: `assert_equal_to_reference` runs both).
+        let list = |morton_bits| {
+            let s = Settings { morton_bits, bvh_branching: 64, sort: SortKind::Radix, read_back: true, ..common::render::settings(192, 108, Technique::ClusteredBvh) };
+            frame(&gpu, &scene, &l, &s).readback.unwrap().list
+        };
+        assert_ne!(list(10), list(2), "city {n}: 2 and 10 Morton bits per axis list the lights in the same order");
         assert!(f.unique_clusters > 10 && f.light_refs > 0, "city {n}: {} clusters, {} refs", f.unique_clusters, f.light_refs);
         let lit = lit(&f.pixels);
         assert!(lit * 4 > f.pixels.len(), "city {n}: the frame should be mostly lit, {lit} of {} pixels", f.pixels.len());

@@ -311,20 +311,30 @@ fn techniques_with_shadows_equal_deferred() {
     }
 }
 
-/// Maps that would pass the device's largest storage binding at the requested resolution are
-/// drawn at the largest halving that fits, said in the frame's statistics, and still match the
-/// reference: one caster more than fit at 1024² per face.
+/// The atlas: each face gets the side its receivers ask (below the largest side here, so the
+/// faces differ from one another and take less than room for all at the largest); an atlas one
+/// texel short of that halves every side once (said in the frame's statistics) and the frame
+/// still matches the reference; an atlas too small for every face at the least side is refused
+/// in one line.
 #[test]
-fn maps_past_the_largest_binding_degrade_their_resolution() {
+fn faces_take_what_their_receivers_ask_and_a_short_atlas_halves_them() {
     let gpu = common::gpu();
-    let per_caster = 6 * 4 * 1024 * 1024u64;
-    let n = (gpu.ctx.info.max_storage_buffer_range as u64 / per_caster + 1) as usize;
-    let lights: String = (0..n).map(|i| format!("[[light]]\nposition = [-2, 1, {}]\nradius = 30\nintensity = {}\nshadows = true\n", -3.0 + 6.0 * i as f32 / n as f32, 60.0 / n as f32)).collect();
-    let dir = TempDir::new("shadow-degrade");
+    let dir = TempDir::new("shadow-atlas");
+    let lights: String = (0..5).map(|i| format!("[[light]]\nposition = [-2, 1, {}]\nradius = 30\nintensity = 12\nshadows = true\n", -3.0 + 1.5 * i as f32)).collect();
     let base = description_at([-2.0, 1.0, 0.0], "shadows = true\n");
     let scene = scene_of(&dir, FLOOR_AND_WALL, &format!("{base}{lights}"));
-    let (_, sh) = assert_matches_reference(&gpu, &scene, ShadowSettings { resolution: 1024, ..Default::default() }, "degraded");
-    assert_eq!((sh.casters, sh.resolution, sh.degraded_from), (n + 1, 512, Some(1024)), "{sh:?}");
+    let shadow = ShadowSettings { resolution: 4096, ..Default::default() };
+    let (_, sh) = assert_matches_reference(&gpu, &scene, shadow, "atlas");
+    let most = 6 * sh.casters as u64 * 4096 * 4096;
+    eprintln!("atlas: {} faces with receivers took {} texels (room for all at 4096²: {most})", sh.faces_with_receivers, sh.atlas_used);
+    assert!(sh.shift == 0 && sh.atlas_used > 0 && (sh.atlas_used as u64) * 16 < most, "{sh:?}");
+    let short = ShadowSettings { atlas_bytes: Some(4 * sh.atlas_used as u64 - 4), ..shadow };
+    let (_, halved) = assert_matches_reference(&gpu, &scene, short, "short atlas");
+    assert_eq!((halved.shift, halved.faces_with_receivers), (1, sh.faces_with_receivers), "{halved:?}");
+    assert!(halved.atlas_used <= halved.atlas_texels && halved.atlas_used * 3 < sh.atlas_used, "{halved:?}");
+    let tiny = ShadowSettings { atlas_bytes: Some(1024), ..shadow };
+    let e = render_error(&gpu, &scene, &scene.lights, Precision::Oct16, &Settings { shadow: tiny, ..settings(160, 120, Technique::Deferred) });
+    assert!(e.contains("6 shadow-casting lights need a shadow atlas of at least 9 KiB") && !e.contains('\n'), "{e}");
     common::assert_clean(&gpu);
 }
 

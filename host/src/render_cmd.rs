@@ -57,10 +57,16 @@ pub struct RenderArgs {
     /// keeps what the scene and `--shadow-fraction` say.
     #[arg(long, value_enum, default_value_t = ShadowCasters::Listed)]
     pub shadows: ShadowCasters,
-    /// Texels per side of each face of a shadow-casting light's cube shadow map (1..=4096;
-    /// 24 · N² bytes per shadow-casting light).
+    /// The largest side, in texels, of a face of a shadow-casting light's cube shadow map
+    /// (1..=4096): each face gets the side its receivers ask (about two texels across a pixel's
+    /// footprint), up to this.
     #[arg(long, default_value_t = crate::render::shadow_maps::DEFAULT_RESOLUTION)]
     pub shadow_resolution: u32,
+    /// MiB of the shadow atlas all faces share; default: room for every face at
+    /// `--shadow-resolution`, within the device's largest storage binding. Faces that ask for more
+    /// than it holds are all halved until they fit (said in a warning and `--stats`).
+    #[arg(long, value_name = "MIB")]
+    pub shadow_atlas: Option<u64>,
     /// How the shadow lookup filters: `nearest` (one texel) or `bilinear` (2 × 2 percentage-closer
     /// filtering).
     #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowFilter::Bilinear)]
@@ -70,7 +76,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowRaster::Compute)]
     pub shadow_raster: crate::render::shadow_maps::ShadowRaster,
     /// Which cube faces of the casters get triangles: `receivers` (only faces the frame's pixels
-    /// look up, found from the G-buffer) or `all` (every face a batch meets). Same image.
+    /// look up, found from the G-buffer, each at the side its receivers ask) or `all` (every face
+    /// a batch meets, each at `--shadow-resolution`).
     #[arg(long, value_enum, default_value_t = crate::render::shadow_maps::ShadowFaces::Receivers)]
     pub shadow_faces: crate::render::shadow_maps::ShadowFaces,
     /// Shade the frame on the CPU from the technique's read-back G-buffer, with exact ray-cast
@@ -90,6 +97,12 @@ pub struct RenderArgs {
     /// clamped to 32..=64).
     #[arg(long, value_parser = clap::builder::TypedValueParser::map(clap::builder::PossibleValuesParser::new(["32", "64"]), |s: String| s.parse::<u32>().unwrap_or(0)))]
     pub bvh_branching: Option<u32>,
+    /// Bits per axis of the light BVH's Morton keys for `clustered-bvh` (1..=10, default 10):
+    /// the radix sort orders three times as many bits, one pass per 8 (8 bits per axis: 24-bit
+    /// keys in three passes instead of four). Coarser keys leave lights of one cell in index
+    /// order: looser leaf boxes, same lights found.
+    #[arg(long)]
+    pub morton_bits: Option<u32>,
     /// Keep the light sort + BVH build on the graphics queue instead of overlapping them with the
     /// G-buffer raster on the async-compute queue (devices without one always do).
     #[arg(long)]
@@ -163,6 +176,7 @@ impl RenderArgs {
             frames,
             read_back,
             bvh_branching: self.bvh_branching.unwrap_or(0),
+            morton_bits: self.morton_bits.unwrap_or(0),
             async_compute: !self.no_async_compute,
             sort: self.sort,
             fp_lists: self.fp_lists,
@@ -171,7 +185,7 @@ impl RenderArgs {
             dispatch_times: self.dispatch_times,
             msaa: self.msaa,
             light_record: self.light_record,
-            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, filter: self.shadow_filter, raster: self.shadow_raster, faces: self.shadow_faces },
+            shadow: crate::render::shadow_maps::ShadowSettings { resolution: self.shadow_resolution, atlas_bytes: self.shadow_atlas.map(|m| m.saturating_mul(1 << 20)), filter: self.shadow_filter, raster: self.shadow_raster, faces: self.shadow_faces },
         }
     }
 }
@@ -307,8 +321,8 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         eprintln!("warning: compact light records move lights by up to {:.3e} (the smallest light radius is {smallest:.3e}): the lights span a large box; --light-record full keeps them exact", frame.light_moved);
     }
     if let Some(sh) = frame.shadows {
-        if let Some(requested) = sh.degraded_from {
-            eprintln!("warning: {} shadow-casting lights at {requested}² texels per face pass the device's largest storage binding: drawn at {}²", sh.casters, sh.resolution);
+        if sh.shift > 0 {
+            eprintln!("warning: the shadow atlas ({} MiB) could not hold the sides the faces asked: every side divided by {} (--shadow-atlas raises it)", (4 * sh.atlas_texels as u64) >> 20, 1u32 << sh.shift);
         }
     }
     if a.shadow_reference {

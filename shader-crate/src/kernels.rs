@@ -255,6 +255,8 @@ pub const ALL: &[Kernel<()>] = &[
     crate::shadow_raster::handles::SHADOW_RASTER.erased(),
     crate::shadow_receivers::handles::SHADOW_RECEIVER_TILES.erased(),
     crate::shadow_receivers::handles::SHADOW_RECEIVER_FACES.erased(),
+    crate::shadow_atlas::handles::SHADOW_FACE_LEVELS.erased(),
+    crate::shadow_atlas::handles::SHADOW_FACE_ALLOC.erased(),
 ];
 
 /// A vertex + fragment entry pair of the raster module, drawn with vertex pulling: set 0 holds

@@ -38,7 +38,8 @@
 //! * [`shadow`] — cube shadow maps: the raster pass that fills them and the per-light lookup
 //!   of the shading loop; [`shadow_cull`] — the batches of triangles culled per face that the
 //!   raster pass draws; [`shadow_raster`] — the same batches rasterised in a compute kernel;
-//!   [`shadow_receivers`] — the faces whose texels the frame's pixels look up.
+//!   [`shadow_receivers`] — the faces whose texels the frame's pixels look up; [`shadow_atlas`]
+//!   — each face's resolution and place in the shared atlas.
 //!
 //! Techniques: [`deferred`] (brute force), [`clustered`] (+ [`clustered_bvh`]), [`tiled`],
 //! [`clustered_aabb`], [`forward_plus`] (+ [`raster_forward`]).
@@ -131,6 +132,7 @@ pub mod reconstruct;
 pub mod scan;
 pub mod shading;
 pub mod shadow;
+pub mod shadow_atlas;
 pub mod shadow_cull;
 pub mod shadow_raster;
 pub mod shadow_receivers;

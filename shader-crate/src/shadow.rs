@@ -1,17 +1,21 @@
-//! Cube shadow maps: the shadows of the lights that cast them (`cast_shadows`), one map of six
-//! `res × res` faces per shadow-casting light, in the frame's view space.
+//! Cube shadow maps: the shadows of the lights that cast them (`cast_shadows`), six faces per
+//! shadow-casting light in the frame's view space, each face at the resolution its receivers
+//! need in one shared atlas (`shadow_atlas`: Olsson et al.'s virtual cube shadow maps, with a
+//! whole face as the unit of allocation).
 //!
 //! Steps (host: `render/shadow_maps.rs`):
-//! 1. **Clear** every texel to [`NO_OCCLUDER`].
-//! 2. **Raster** (`shadow_receivers`: the faces the frame's pixels look up; `shadow_cull`:
-//!    batches of the scene's opaque triangles culled per face on the GPU; then
-//!    `shadow_raster`'s compute kernel, or one indirect draw with fragments in
+//! 1. **Clear** every texel of the atlas to [`NO_OCCLUDER`].
+//! 2. **Faces and atlas** (`shadow_receivers`: the faces the frame's pixels look up and the
+//!    resolution each asks; `shadow_atlas`: each such face's side and first texel in the face
+//!    table, [`face_entry`]).
+//! 3. **Raster** (`shadow_cull`: batches of the scene's opaque triangles culled per face on the
+//!    GPU; then `shadow_raster`'s compute kernel, or one indirect draw with fragments in
 //!    [`shadow_distance_fs`]): each batch written into a face `f` of a caster ([`face_clip`]) of
 //!    `res × res` texels, each covered texel keeping the distance from the light to the surface
 //!    along the texel centre's ray with an atomic minimum on the float's bits (non-negative
 //!    floats order as their bit patterns). No depth target is tested: the minimum is the depth
 //!    test, and one dispatch or draw fills every face of every caster.
-//! 3. **Lookup** ([`CubeShadows::visibility`], in the shading loop of every technique that
+//! 4. **Lookup** ([`CubeShadows::visibility`], in the shading loop of every technique that
 //!    renders shadows, `shading::shade_lights_with`): the receiver's face and texel, its distance
 //!    compared with the stored one, one texel or the bilinear weights of four
 //!    ([`SHADOW_FILTER_BILINEAR`], percentage-closer filtering).
@@ -38,8 +42,9 @@
 //! (`shadow_tests.rs`), and a contact shadow starts at most about `NORMAL_OFFSET_TEXELS + 1`
 //! texels late.
 //!
-//! **Memory:** `FACES · res² · 4` B per shadow-casting light (24 KiB at res 32, 1.5 MiB at 256),
-//! [`SHADOW_HEADER_WORDS`] + 1 word per light (the slots), 16 B per caster (its record).
+//! **Memory:** the atlas (4 B per texel; `res² · 4` B per face in it: 4 KiB at 32, 256 KiB at
+//! 256), [`SHADOW_HEADER_WORDS`] + 1 word per light (the slots), [`FACE_WORDS`] words per caster
+//! face (the face table), 16 B per caster (its record).
 use crate::layout::PointLight;
 use glam::{Vec3, Vec4};
 #[cfg(feature = "graphics")]
@@ -51,8 +56,14 @@ pub const FACES: u32 = 6;
 pub const NO_OCCLUDER: u32 = 0x7f7f_ffff;
 /// The slot of a light that casts no shadow.
 pub const NO_SHADOW: u32 = u32::MAX;
-/// Words before the per-light slots in the slot buffer: `[res, filter, 0, 0]`.
+/// Words before the per-light slots in the slot buffer: `[largest res, filter, table, 0]`
+/// (`table`: the word where the face table starts, after the slots; `shadow_atlas`).
 pub const SHADOW_HEADER_WORDS: u32 = 4;
+/// Header word holding the first word of the face table.
+pub const HEADER_TABLE: usize = 2;
+/// Words of a face's entry in the face table (`shadow_atlas`): its first texel in the atlas and
+/// its texels per side (0: no pixel of the frame looks it up, so it holds no texel).
+pub const FACE_WORDS: u32 = 2;
 /// One texel per lookup (the nearest).
 pub const SHADOW_FILTER_NEAREST: u32 = 0;
 /// Four texels per lookup, weighted bilinearly (2 × 2 percentage-closer filtering).
@@ -126,8 +137,9 @@ impl Shadowing for NoShadows {
     }
 }
 
-/// The frame's cube shadow maps: `slots` = `[res, filter, 0, 0]` then each light's slot (or
-/// [`NO_SHADOW`]); `maps` = slot-major, face-major, row-major distances (`f32` bits).
+/// The frame's cube shadow maps: `slots` = `[largest res, filter, table, 0]`, each light's slot
+/// (or [`NO_SHADOW`]), then the face table ([`face_entry`]); `maps` = the atlas, each face
+/// row-major at its entry's first texel (`f32` bits of distances).
 pub struct CubeShadows<'a> {
     pub slots: &'a [u32],
     pub maps: &'a [u32],
@@ -140,21 +152,49 @@ impl Shadowing for CubeShadows<'_> {
         if slot == NO_SHADOW {
             return 1.0;
         }
-        cube_visibility(self.maps, slot, self.slots[0], self.slots[1], light, pos, normal)
+        cube_visibility(self.maps, self.slots, slot, self.slots[1], light, pos, normal)
     }
 }
 
-/// [`CubeShadows::visibility`] of map `slot` (`res`, `filter`), the module docs' bias rule.
+/// `(first texel, texels per side)` of map `map` (`slot · 6 + face`) in the face table of `slots`
+/// (side 0: the face holds no texel).
 #[inline]
-pub fn cube_visibility(maps: &[u32], slot: u32, res: u32, filter: u32, light: Vec3, pos: Vec3, normal: Vec3) -> f32 {
+pub fn face_entry(slots: &[u32], map: u32) -> (u32, u32) {
+    let w = (slots[HEADER_TABLE] + map * FACE_WORDS) as usize;
+    (slots[w], slots[w + 1])
+}
+
+/// [`CubeShadows::visibility`] of the map in slot `slot` with `filter`, the module docs' bias
+/// rule: the texel size of the offset is that of the face the receiver lies in, the lookup that
+/// of the face the offset point lies in. Where that face holds no texel (the offset crossed into
+/// a face no receiver asked for, which only a short atlas allows: `shadow_receivers`), the
+/// receiver's own face is looked up at its edge instead; where the receiver's own face holds none
+/// (no lit receiver lies there), the light passes.
+#[inline]
+pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, light: Vec3, pos: Vec3, normal: Vec3) -> f32 {
     let to_light = light - pos;
-    let texel = 2.0 * to_light.length() / res as f32;
+    let at = cube_face(-to_light);
+    let (base_at, res_at) = face_entry(slots, slot * FACES + at);
+    if res_at == 0 {
+        return 1.0;
+    }
+    let texel = 2.0 * to_light.length() / res_at as f32;
     let n = if normal.dot(to_light) < 0.0 { -normal } else { normal };
     let d = pos + n * (NORMAL_OFFSET_TEXELS * texel) - light;
     let reach = d.length() - DEPTH_BIAS_TEXELS * texel;
     let f = cube_face(d);
+    let (base, res) = face_entry(slots, slot * FACES + f);
+    if res == 0 {
+        return face_visibility(maps, base_at, res_at, filter, d, at, reach);
+    }
+    face_visibility(maps, base, res, filter, d, f, reach)
+}
+
+/// The lookup of direction `d` on face `f` (`res × res` texels from texel `base` of `maps`): lit
+/// where the stored distance is at least `reach`, one texel or four bilinearly weighted.
+#[inline]
+pub fn face_visibility(maps: &[u32], base: u32, res: u32, filter: u32, d: Vec3, f: u32, reach: f32) -> f32 {
     let (x, y) = face_texel(d, f, res);
-    let base = (slot * FACES + f) * res * res;
     if filter == SHADOW_FILTER_BILINEAR {
         let (fx, fy) = (x - 0.5, y - 0.5);
         let (ix, iy) = (floor(fx), floor(fy));
@@ -198,42 +238,55 @@ fn clamp(t: i32, last: i32) -> u32 {
     (if t < 0 { 0 } else if t > last { last } else { t }) as u32
 }
 
+/// Clip position `clip` of a face of `res` texels per side moved into the `res × res` corner of a
+/// render area of `area` texels per side (`res ≤ area`): the viewport maps the face's `[−1, 1]`
+/// onto texels `0..res`, so the fragment at texel `(x, y)` of the area is texel `(x, y)` of the
+/// face. The area clips the face's left and top sides; fragments past its right and bottom sides
+/// lie outside the face's pyramid and store nothing ([`shadow_distance_fs`]).
+#[inline]
+pub fn face_area_clip(clip: Vec4, res: u32, area: u32) -> Vec4 {
+    let k = res as f32 / area as f32;
+    Vec4::new(clip.x * k + (k - 1.0) * clip.w, clip.y * k + (k - 1.0) * clip.w, clip.z, clip.w)
+}
+
 /// Record of a caster for the raster pass: view-space position and radius.
 #[inline]
 pub fn caster_record(l: &PointLight) -> [f32; 4] {
     [l.position[0], l.position[1], l.position[2], l.radius]
 }
 
-/// Push constants of the raster pass's fragment stage.
+/// Push constants of the raster pass: the render area's side (the largest face side; each face
+/// draws into the `res × res` corner of it, `shadow_cull::batch_vertex`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(bytemuck::Pod, bytemuck::Zeroable))]
 pub struct ShadowParams {
-    /// Texels per face side.
+    /// Texels per side of the render area.
     pub res: u32,
     pub pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<ShadowParams>() == 16);
 
-/// Step 2, fragment stage: keeps the nearest distance of face map `map` at texel `⌊frag.xy⌋`
-/// (within the caster's radius).
+/// Step 2, fragment stage: keeps the nearest distance at texel `⌊frag.xy⌋` of the face whose
+/// `res × res` texels start at `base` (within the caster's radius; fragments past the face's
+/// corner of the render area lie outside its pyramid and store nothing).
 #[cfg(feature = "graphics")]
 #[spirv(fragment)]
 pub fn shadow_distance_fs(
     #[spirv(frag_coord)] frag: Vec4,
     in_offset: Vec3,
-    #[spirv(flat)] in_map: u32,
+    #[spirv(flat)] in_base: u32,
+    #[spirv(flat)] in_res: u32,
     #[spirv(flat)] in_radius: f32,
-    #[spirv(push_constant)] p: &ShadowParams,
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] maps: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] maps: &mut [u32],
 ) {
     let distance = in_offset.length();
-    if distance <= in_radius {
-        let texel = (in_map * p.res + frag.y as u32) * p.res + frag.x as u32;
-        crate::fragment_atomics::atomic_min(&mut maps[texel as usize], distance.to_bits());
+    let (x, y) = (frag.x as u32, frag.y as u32);
+    if distance <= in_radius && x < in_res && y < in_res {
+        crate::fragment_atomics::atomic_min(&mut maps[(in_base + y * in_res + x) as usize], distance.to_bits());
     }
 }
 
 #[cfg(test)]
 #[path = "shadow_tests.rs"]
-mod tests;
+pub(crate) mod tests;

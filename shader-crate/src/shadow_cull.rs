@@ -42,13 +42,14 @@ pub const ENTRY_WORDS: u32 = 2;
 /// Words of the arguments: a `VkDrawIndirectCommand` (vertex count, instance count, first
 /// vertex, first instance), the entries the cull counted ([`ARGS_COUNTED`]), then a
 /// `VkDispatchIndirectCommand` of one workgroup per written entry ([`ARGS_DISPATCH`], for
-/// `shadow_raster`), the faces with receivers ([`ARGS_FACES`]).
-pub const ARGS_WORDS: u32 = 9;
+/// `shadow_raster`), the faces with receivers ([`ARGS_FACES`]), the atlas's level histogram,
+/// shift and texels taken (`shadow_atlas::ARGS_LEVELS`, `ARGS_SHIFT`, `ARGS_USED`).
+pub const ARGS_WORDS: u32 = crate::shadow_atlas::ARGS_USED as u32 + 1;
 /// Word of the arguments that counts entries (written or not).
 pub const ARGS_COUNTED: usize = 4;
 /// First word of the compute raster's dispatch arguments.
 pub const ARGS_DISPATCH: u32 = 5;
-/// Word of the arguments that counts the casters' faces with receivers (`shadow_receivers`).
+/// Word of the arguments that counts the casters' faces with receivers (`shadow_atlas`).
 pub const ARGS_FACES: usize = 8;
 /// Invocations of a cull workgroup (batches along x, casters along y).
 pub const CULL_WORKGROUP: u32 = 64;
@@ -107,8 +108,9 @@ pub fn batch_sphere(batches: &[u32], b: u32) -> (Vec3, f32) {
 }
 
 /// Step 1 for batch `b` and caster `c` (`casters`: view-space position and radius per caster;
-/// `view`: the position buffer's space → view space, a rotation; `needed`: per caster, the faces
-/// with receivers, `shadow_receivers`): appends an entry per face met that has receivers.
+/// `view`: the position buffer's space → view space, a rotation; `needed`: per caster face, its
+/// level, 0 without receivers, `shadow_receivers`): appends an entry per face met that has
+/// receivers.
 #[cfg(feature = "compute")]
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -120,10 +122,10 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     let k = (c * crate::shadow::CASTER_WORDS) as usize;
     let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
     let d = (view * centre.extend(1.0)).truncate() - light;
-    let mask = face_mask(d, r, casters[k + 3]) & needed[c as usize];
+    let mask = face_mask(d, r, casters[k + 3]);
     let mut f = 0;
     while f < FACES {
-        if mask & (1 << f) != 0 {
+        if mask & (1 << f) != 0 && needed[(c * FACES + f) as usize] != 0 {
             let slot = counted.fetch_add(1);
             if slot < p.capacity {
                 entries[(slot * ENTRY_WORDS) as usize] = b;
@@ -241,27 +243,33 @@ pub fn shadow_draw_args(#[spirv(push_constant)] p: &ShadowCullParams, #[spirv(st
     draw_args(args, p.capacity);
 }
 
-/// Step 3, vertex stage.
+/// Step 3, vertex stage: [`batch_vertex`], moved into the corner of the render area its face's
+/// side takes (`shadow::face_area_clip`).
 #[cfg(feature = "graphics")]
 #[spirv(vertex)]
 #[allow(clippy::too_many_arguments)]
 pub fn shadow_batch_vs(
     #[spirv(vertex_index)] vertex_index: i32,
+    #[spirv(push_constant)] p: &crate::shadow::ShadowParams,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] positions: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] indices: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] camera: &crate::layout::RasterCamera,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] casters: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] batches: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] slots: &[u32],
     #[spirv(position)] out_position: &mut Vec4,
     out_offset: &mut Vec3,
-    #[spirv(flat)] out_map: &mut u32,
+    #[spirv(flat)] out_base: &mut u32,
+    #[spirv(flat)] out_res: &mut u32,
     #[spirv(flat)] out_radius: &mut f32,
 ) {
     let (clip, d, map, radius) = batch_vertex(vertex_index as u32, positions, indices, Mat4::from_cols_array_2d(&camera.view), casters, batches, entries);
-    *out_position = clip;
+    let (base, res) = crate::shadow::face_entry(slots, map);
+    *out_position = crate::shadow::face_area_clip(clip, res, p.res);
     *out_offset = d;
-    *out_map = map;
+    *out_base = base;
+    *out_res = res;
     *out_radius = radius;
 }
 
@@ -276,9 +284,9 @@ pub mod handles {
     pub const SHADOW_CULL: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_cull", 6, [super::CULL_WORKGROUP, 1, 1], false);
     /// Step 2: arguments.
     pub const SHADOW_DRAW_ARGS: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_draw_args", 1, [1, 1, 1], false);
-    /// Step 3: positions, indices, camera, caster records, batches, entries (vertex stage); maps
-    /// (fragment stage).
-    pub const SHADOW_BATCHES: RasterKernel<ShadowParams> = RasterKernel::with_vertex_buffers("shadow_cull::shadow_batch_vs", "shadow::shadow_distance_fs", 6, 1, 0);
+    /// Step 3: positions, indices, camera, caster records, batches, entries, slots (vertex
+    /// stage); the atlas (fragment stage).
+    pub const SHADOW_BATCHES: RasterKernel<ShadowParams> = RasterKernel::with_vertex_buffers("shadow_cull::shadow_batch_vs", "shadow::shadow_distance_fs", 7, 1, 0);
 }
 
 #[cfg(test)]

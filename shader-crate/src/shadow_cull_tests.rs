@@ -99,7 +99,7 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
         let mut args = [0u32; ARGS_WORDS as usize];
         for c in 0..p.casters + 1 {
             for b in 0..n_batches + 3 {
-                cull_batch(b, c, &p, view, &batches, &casters, &[u32::MAX; 8], &mut entries, &mut args[ARGS_COUNTED]);
+                cull_batch(b, c, &p, view, &batches, &casters, &[1; 7 * FACES as usize], &mut entries, &mut args[ARGS_COUNTED]);
             }
         }
         draw_args(&mut args, capacity);

@@ -6,7 +6,8 @@
 //! Steps (one workgroup of [`RASTER_WORKGROUP`] invocations per cull entry `(batch, map)`, the
 //! dispatch's size written by `shadow_cull::draw_args`; [`raster_entry`]):
 //! 1. **Set-up**: invocation `t` takes triangle `t` of the batch: its corners relative to the
-//!    light, in the frame of face `map % 6` ([`face_triangle`]): culled as in the draw path
+//!    light, in the frame of face `map % 6` at the side the face table gives it
+//!    (`shadow_atlas`; [`face_triangle`]): culled as in the draw path
 //!    (`shadow_cull::triangle_outside`) and where its plane passes through the light (seen edge on,
 //!    it covers no texel centre); else its three edge planes through the light, its plane, and
 //!    the texels its projection onto the face can reach ([`FaceTriangle`]'s box).
@@ -39,7 +40,7 @@
 //!
 //! **Memory:** [`QUEUE_WORDS`] words of workgroup memory; no buffer of its own.
 use crate::coop::{Coop, SharedU32};
-use crate::shadow::{face_axes, CASTER_WORDS, FACES};
+use crate::shadow::{face_axes, face_entry, CASTER_WORDS, FACES};
 use crate::shadow_cull::{corner_offset, triangle_outside, ARGS_COUNTED, BATCH_TRIANGLES, BATCH_WORDS, ENTRY_WORDS};
 use glam::{Mat4, Vec3};
 #[cfg(feature = "compute")]
@@ -55,14 +56,14 @@ pub const QUEUE_WORDS: usize = 1 + BATCH_TRIANGLES as usize;
 /// Relative tolerance of the inside tests (module docs).
 pub const EDGE_TOLERANCE: f32 = 1e-5;
 
-/// Push constants: texels per face side, entries the buffer holds.
+/// Push constants: entries the buffer holds (each face's side and place come from the face
+/// table, `shadow_atlas`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(not(target_arch = "spirv"), derive(bytemuck::Pod, bytemuck::Zeroable))]
 pub struct ShadowRasterParams {
-    pub res: u32,
     pub capacity: u32,
-    pub pad: [u32; 2],
+    pub pad: [u32; 3],
 }
 const _: () = assert!(core::mem::size_of::<ShadowRasterParams>() == 16);
 
@@ -346,9 +347,9 @@ impl MinStore for &[core::sync::atomic::AtomicU32] {
 }
 
 /// Tests texels `from, from + step, …` of triangle `t`'s box and keeps each covered one's
-/// distance in map `map` of `maps`.
+/// distance in the face of `res × res` texels from texel `base` of `maps`.
 #[inline]
-fn raster_texels<M: MinStore + ?Sized>(t: &FaceTriangle, from: u32, step: u32, map: u32, res: u32, maps: &mut M) {
+fn raster_texels<M: MinStore + ?Sized>(t: &FaceTriangle, from: u32, step: u32, base: u32, res: u32, maps: &mut M) {
     let n = t.texels();
     let w = if n == 0 { 1 } else { t.hi_x - t.lo_x + 1 };
     let mut i = from;
@@ -356,7 +357,7 @@ fn raster_texels<M: MinStore + ?Sized>(t: &FaceTriangle, from: u32, step: u32, m
         let (x, y) = (t.lo_x + i % w, t.lo_y + i / w);
         let distance = texel_distance(t, x, y, res);
         if distance >= 0.0 {
-            maps.min_at((map * res + y) * res + x, distance.to_bits());
+            maps.min_at(base + y * res + x, distance.to_bits());
         }
         i += step;
     }
@@ -392,6 +393,7 @@ pub fn raster_entry<C: Coop, S: SharedU32 + ?Sized, M: MinStore + ?Sized>(
     batches: &[u32],
     entries: &[u32],
     args: &[u32],
+    slots: &[u32],
     maps: &mut M,
 ) {
     let written = if args[ARGS_COUNTED] < p.capacity { args[ARGS_COUNTED] } else { p.capacity };
@@ -404,20 +406,21 @@ pub fn raster_entry<C: Coop, S: SharedU32 + ?Sized, M: MinStore + ?Sized>(
     }
     c.workgroup_barrier();
     let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
-    let tri = entry_triangle(t, b, map, p.res, view, positions, indices, casters, batches);
+    let (base, res) = face_entry(slots, map);
+    let tri = entry_triangle(t, b, map, res, view, positions, indices, casters, batches);
     let n = tri.texels();
     if n > SMALL_TEXELS {
         let slot = shared.atomic_add(0, 1);
         shared.store(1 + slot, t);
     } else if n > 0 {
-        raster_texels(&tri, 0, 1, map, p.res, maps);
+        raster_texels(&tri, 0, 1, base, res, maps);
     }
     c.workgroup_barrier();
     let queued = shared.load(0);
     let mut q = 0;
     while q < queued {
-        let big = entry_triangle(shared.load(1 + q), b, map, p.res, view, positions, indices, casters, batches);
-        raster_texels(&big, t, RASTER_WORKGROUP, map, p.res, maps);
+        let big = entry_triangle(shared.load(1 + q), b, map, res, view, positions, indices, casters, batches);
+        raster_texels(&big, t, RASTER_WORKGROUP, base, res, maps);
         q += 1;
     }
 }
@@ -443,11 +446,12 @@ pub fn shadow_raster(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] batches: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] entries: &[u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] args: &[u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] maps: &mut [u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] slots: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] maps: &mut [u32],
 ) {
     let c = crate::coop::gpu::GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
     let e = wg.y * nwg.x + wg.x;
-    raster_entry(&c, shared, e, p, Mat4::from_cols_array_2d(&camera.view), positions, indices, casters, batches, entries, args, maps);
+    raster_entry(&c, shared, e, p, Mat4::from_cols_array_2d(&camera.view), positions, indices, casters, batches, entries, args, slots, maps);
 }
 
 /// Typed handles (host side).
@@ -456,8 +460,9 @@ pub mod handles {
     use super::ShadowRasterParams;
     use crate::kernels::Kernel;
 
-    /// Positions, indices, camera, caster records, batches, entries, arguments, maps.
-    pub const SHADOW_RASTER: Kernel<ShadowRasterParams> = Kernel::new("shadow_raster::shadow_raster", 8, [super::RASTER_WORKGROUP, 1, 1], true);
+    /// Positions, indices, camera, caster records, batches, entries, arguments, slots (the face
+    /// table), the atlas.
+    pub const SHADOW_RASTER: Kernel<ShadowRasterParams> = Kernel::new("shadow_raster::shadow_raster", 9, [super::RASTER_WORKGROUP, 1, 1], true);
 }
 
 #[cfg(test)]

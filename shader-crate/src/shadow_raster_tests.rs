@@ -1,6 +1,6 @@
 use super::*;
 use crate::coop::cpu::{run_workgroups, Emulation};
-use crate::shadow::{cube_face, NO_OCCLUDER};
+use crate::shadow::{cube_face, NO_OCCLUDER, SHADOW_HEADER_WORDS};
 use crate::shadow_cull::tests::batch_words;
 use crate::shadow_cull::{cull_batch, draw_args, ShadowCullParams, ARGS_DISPATCH, ARGS_WORDS};
 use crate::test_support::Rng;
@@ -158,7 +158,8 @@ fn meshes_leave_no_texel_between_their_triangles() {
 }
 
 /// A small scene's batches culled for a few casters (`shadow_cull`) and rasterised by the
-/// emulated kernel at subgroup widths 4 to 64: the maps equal those of the triangles drawn one
+/// emulated kernel at subgroup widths 4 to 64 into faces of six sides in one atlas: the maps
+/// equal those of the triangles drawn one
 /// at a time over every texel of their faces (no box), with large triangles (shared by the
 /// workgroup) and small ones (one invocation each) both present; entries past the written ones
 /// and the dispatch's grid as `draw_args` writes it.
@@ -186,21 +187,30 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     let mut args = [0u32; ARGS_WORDS as usize];
     for c in 0..cull.casters {
         for b in 0..n_batches {
-            cull_batch(b, c, &cull, view, &batches, &casters, &[u32::MAX; 8], &mut entries, &mut args[ARGS_COUNTED]);
+            cull_batch(b, c, &cull, view, &batches, &casters, &[1; 4 * FACES as usize], &mut entries, &mut args[ARGS_COUNTED]);
         }
     }
     draw_args(&mut args, cull.capacity);
     let written = args[ARGS_COUNTED];
     let d = ARGS_DISPATCH as usize;
     assert!(written > 10 && args[d] * args[d + 1] >= written && args[d + 2] == 1, "{written} entries, dispatch {:?}", &args[d..d + 3]);
-    let res = 24;
-    let texels = (lights.len() as u32 * FACES * res * res) as usize;
+    // The face table: sides from 5 to 40 texels, the faces one after another in the atlas.
+    let maps_n = lights.len() as u32 * FACES;
+    let mut slots = vec![40, 0, SHADOW_HEADER_WORDS, 0];
+    let mut texels = 0;
+    for m in 0..maps_n {
+        let side = [24, 8, 5, 40, 16, 33][(m % 6) as usize];
+        slots.extend([texels, side]);
+        texels += side * side;
+    }
+    let texels = texels as usize;
     // Reference: each entry's triangles over every texel of their face.
     let mut want = vec![NO_OCCLUDER; texels];
     let (mut large, mut small) = (0, 0);
     for e in 0..written {
         let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
         for k in 0..BATCH_TRIANGLES {
+            let (base, res) = face_entry(&slots, map);
             let t = entry_triangle(k, b, map, res, view, &positions, &indices, &casters, &batches);
             match t.texels() {
                 0 => continue,
@@ -208,19 +218,19 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
                 _ => small += 1,
             }
             let whole = FaceTriangle { lo_x: 0, lo_y: 0, hi_x: res - 1, hi_y: res - 1, ..t };
-            raster_texels(&whole, 0, 1, map, res, &mut want[..]);
+            raster_texels(&whole, 0, 1, base, res, &mut want[..]);
         }
     }
     assert!(large > 20 && small > 200, "{large} large and {small} small triangles");
     assert!(want.iter().filter(|&&w| w != NO_OCCLUDER).count() > texels / 20, "the maps are nearly empty");
-    let p = ShadowRasterParams { res, capacity: cull.capacity, pad: [0; 2] };
+    let p = ShadowRasterParams { capacity: cull.capacity, pad: [0; 3] };
     for width in [4, 8, 16, 32, 64] {
         let maps: Vec<AtomicU32> = (0..texels).map(|_| AtomicU32::new(NO_OCCLUDER)).collect();
         let emu = Emulation { width, workgroup_size: RASTER_WORKGROUP, shared_words: QUEUE_WORDS };
         // Two workgroups more than the entries (a grid's last row): they return.
         run_workgroups(emu, written + 2, |e, c, s| {
             let mut m: &[AtomicU32] = &maps;
-            raster_entry(c, s, e, &p, view, &positions, &indices, &casters, &batches, &entries, &args, &mut m);
+            raster_entry(c, s, e, &p, view, &positions, &indices, &casters, &batches, &entries, &args, &slots, &mut m);
         });
         let got: Vec<u32> = maps.iter().map(|m| m.load(Ordering::Relaxed)).collect();
         let off = got.iter().zip(&want).filter(|(g, w)| g != w).count();

@@ -1,7 +1,8 @@
 //! Which cube faces of each shadow-casting light have receivers on screen (Olsson et al., "More
 //! Efficient Virtual Shadow Maps for Many Lights", i3D 2014, §4.1: only the faces the frame's
 //! visible surfaces look up are rendered). A face no pixel of the frame looks up needs no
-//! triangle: the batch cull (`shadow_cull`) sends batches only to faces whose bit is set here.
+//! triangle: the batch cull (`shadow_cull`) sends batches only to faces with a level here, and
+//! the atlas (`shadow_atlas`) gives each the resolution its receivers ask.
 //!
 //! Steps (host: `render/shadow_maps.rs`, before the cull):
 //! 1. **Tiles** ([`shadow_receiver_tiles`], one invocation per tile of [`RECEIVER_TILE`]²
@@ -11,16 +12,18 @@
 //! 2. **Faces** ([`shadow_receiver_faces`], one invocation per caster and run of
 //!    [`TILES_PER_INVOCATION`] tiles, [`receiver_faces`]): each tile's sphere, widened by the
 //!    lookup's normal offset ([`lookup_reach`]), through `shadow_cull::face_mask` against the
-//!    caster; the faces met ORed into the caster's word of `needed`, and the faces newly set
-//!    counted (`shadow_cull::ARGS_FACES`).
+//!    caster; each face met keeps the largest resolution level its receivers ask
+//!    (`shadow_atlas::receiver_level`) in its word of `needed` (an atomic maximum; 0: none).
 //!
 //! **Conservative:** a pixel's lookup direction `pos + n·offset − light` lies within its tile's
-//! widened sphere, and `face_mask` holds every face a point of the sphere within the light's
-//! radius lies in; a pixel beyond the radius receives no light, so its face does not matter.
+//! widened sphere while its face has at least the side its tile asked (the atlas is not short),
+//! and `face_mask` holds every face a point of the sphere within the light's radius lies in; a
+//! pixel beyond the radius receives no light, so its face does not matter.
 //!
-//! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 4 B per caster.
+//! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 4 B per caster face.
 use crate::layout::ClusterGrid;
-use crate::shadow::{CASTER_WORDS, NORMAL_OFFSET_TEXELS};
+use crate::shadow::{CASTER_WORDS, FACES, NORMAL_OFFSET_TEXELS};
+use crate::shadow_atlas::{face_side, receiver_level};
 use crate::shadow_cull::{face_mask, CULL_MARGIN};
 use glam::Vec3;
 #[cfg(target_arch = "spirv")]
@@ -43,7 +46,7 @@ pub const RECEIVER_WORKGROUP: u32 = 64;
 #[cfg_attr(not(target_arch = "spirv"), derive(bytemuck::Pod, bytemuck::Zeroable))]
 pub struct ReceiverParams {
     pub grid: ClusterGrid,
-    /// Texels per face side.
+    /// The largest face side (`--shadow-resolution`).
     pub res: u32,
     pub casters: u32,
     pub tiles_x: u32,
@@ -110,49 +113,73 @@ fn box_sphere(lo: Vec3, hi: Vec3) -> (Vec3, f32) {
     }
 }
 
-/// How far a lookup may land from a receiver at most `far` from the light: the normal offset of
-/// the bias rule (`shadow::cube_visibility`), plus a margin for rounding.
+/// How far a lookup may land from a receiver at most `far` from the light on a face of `side`
+/// texels: the normal offset of the bias rule (`shadow::cube_visibility`), plus a margin for
+/// rounding.
 #[inline]
-pub fn lookup_reach(far: f32, res: u32) -> f32 {
-    NORMAL_OFFSET_TEXELS * 2.0 * far / res as f32 + CULL_MARGIN * far
+pub fn lookup_reach(far: f32, side: u32) -> f32 {
+    NORMAL_OFFSET_TEXELS * 2.0 * far / side as f32 + CULL_MARGIN * far
+}
+
+/// Bits per face of [`receiver_faces`]' levels.
+pub const LEVEL_BITS: u32 = 4;
+
+/// Level of face `f` in [`receiver_faces`]' packed levels (0: no receiver).
+#[inline]
+pub fn packed_level(levels: u32, f: u32) -> u32 {
+    (levels >> (LEVEL_BITS * f)) & ((1 << LEVEL_BITS) - 1)
 }
 
 /// Step 2 for caster `c` and tiles `first..first + TILES_PER_INVOCATION`: the faces of the caster
-/// any of those tiles' receivers look up.
+/// any of those tiles' receivers look up, each with the largest level one of them asks
+/// (`shadow_atlas::receiver_level`), packed [`LEVEL_BITS`] per face (face `f` at bit
+/// `LEVEL_BITS · f`; 0: no receiver). A sphere is widened by the lookup's offset on a face of the
+/// side its own level gives ([`lookup_reach`]): the face table gives each face at least that side
+/// unless the atlas is short (`shadow::cube_visibility` then falls back to the receiver's face).
 #[inline]
 pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], casters: &[f32]) -> u32 {
     let k = (c * CASTER_WORDS) as usize;
     let (light, radius) = (Vec3::new(casters[k], casters[k + 1], casters[k + 2]), casters[k + 3]);
     let n = p.tiles_x * p.tiles_y;
     let end = if first + TILES_PER_INVOCATION < n { first + TILES_PER_INVOCATION } else { n };
-    let mut mask = 0;
+    let mut levels = 0;
     let mut t = 2 * first;
     while t < 2 * end {
         // Sphere `t` (two per tile).
         let w = (t * TILE_WORDS / 2) as usize;
         let r = tiles[w + 3];
         if r >= 0.0 {
-            let d = Vec3::new(tiles[w], tiles[w + 1], tiles[w + 2]) - light;
+            let centre = Vec3::new(tiles[w], tiles[w + 1], tiles[w + 2]);
+            let d = centre - light;
             let far = d.length() + r;
-            mask |= face_mask(d, r + lookup_reach(far, p.res), radius + CULL_MARGIN * far);
+            let g = &p.grid;
+            let level = receiver_level(centre, r, light, g.near, g.height, g.tan_half_fov_y, p.res);
+            let mask = face_mask(d, r + lookup_reach(far, face_side(level, 0, p.res)), radius + CULL_MARGIN * far);
+            let mut f = 0;
+            while f < FACES {
+                if mask & (1 << f) != 0 && packed_level(levels, f) < level {
+                    levels = (levels & !(((1 << LEVEL_BITS) - 1) << (LEVEL_BITS * f))) | (level << (LEVEL_BITS * f));
+                }
+                f += 1;
+            }
         }
         t += 1;
     }
-    mask
+    levels
 }
 
-/// `fetch_or` on a storage-buffer word: `OpAtomicOr` (device scope, relaxed) on the GPU, a plain
-/// or off it.
+/// `fetch_max` on a storage-buffer word: `OpAtomicUMax` (device scope, relaxed) on the GPU, a
+/// plain maximum off it.
 #[inline]
-pub fn fetch_or(word: &mut u32, v: u32) -> u32 {
+pub fn fetch_max(word: &mut u32, v: u32) -> u32 {
     #[cfg(target_arch = "spirv")]
     unsafe {
-        spirv_std::arch::atomic_or::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v)
+        spirv_std::arch::atomic_u_max::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v)
     }
     #[cfg(not(target_arch = "spirv"))]
     {
         let old = *word;
-        *word = old | v;
+        *word = old.max(v);
         old
     }
 }
@@ -193,19 +220,19 @@ pub fn shadow_receiver_faces(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 0)] tiles: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] casters: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] needed: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] args: &mut [u32],
 ) {
     let first = id.x * TILES_PER_INVOCATION;
     if first >= p.tiles_x * p.tiles_y || id.y >= p.casters {
         return;
     }
-    let mask = receiver_faces(p, id.y, first, tiles, casters);
-    if mask != 0 {
-        let old = fetch_or(&mut needed[id.y as usize], mask);
-        let added = (mask & !old).count_ones();
-        if added != 0 {
-            crate::light_lists::AtomicAdd::fetch_add(&mut args[crate::shadow_cull::ARGS_FACES], added);
+    let levels = receiver_faces(p, id.y, first, tiles, casters);
+    let mut f = 0;
+    while f < FACES {
+        let level = packed_level(levels, f);
+        if level != 0 {
+            fetch_max(&mut needed[(id.y * FACES + f) as usize], level);
         }
+        f += 1;
     }
 }
 
@@ -217,8 +244,8 @@ pub mod handles {
 
     /// Step 1: depth, tiles.
     pub const SHADOW_RECEIVER_TILES: Kernel<ReceiverParams> = Kernel::new("shadow_receivers::shadow_receiver_tiles", 2, [super::RECEIVER_WORKGROUP, 1, 1], false);
-    /// Step 2: tiles, caster records, needed faces, arguments.
-    pub const SHADOW_RECEIVER_FACES: Kernel<ReceiverParams> = Kernel::new("shadow_receivers::shadow_receiver_faces", 4, [super::RECEIVER_WORKGROUP, 1, 1], false);
+    /// Step 2: tiles, caster records, the faces' levels.
+    pub const SHADOW_RECEIVER_FACES: Kernel<ReceiverParams> = Kernel::new("shadow_receivers::shadow_receiver_faces", 3, [super::RECEIVER_WORKGROUP, 1, 1], false);
 }
 
 #[cfg(test)]

@@ -17,6 +17,16 @@ fn tiles_of(p: &ReceiverParams, depth: &[f32]) -> Vec<f32> {
     tiles
 }
 
+/// Per face the larger of two packed levels.
+fn merge(a: u32, b: u32) -> u32 {
+    (0..FACES).fold(0, |m, f| m | (packed_level(a, f).max(packed_level(b, f)) << (LEVEL_BITS * f)))
+}
+
+/// The faces with a level.
+fn mask_of(levels: u32) -> u32 {
+    (0..FACES).filter(|&f| packed_level(levels, f) != 0).fold(0, |m, f| m | 1 << f)
+}
+
 /// The lookup direction of `shadow::cube_visibility` for a receiver at `pos` with normal `n`.
 fn lookup(light: Vec3, pos: Vec3, normal: Vec3, res: u32) -> Vec3 {
     let to_light = light - pos;
@@ -27,8 +37,9 @@ fn lookup(light: Vec3, pos: Vec3, normal: Vec3, res: u32) -> Vec3 {
 
 /// On a synthetic G-buffer (a near wall, a far slope, sky; partial tiles at the right and bottom
 /// edges) with lights near the surfaces: every surface point lies in one of its tile's spheres, a tile of
-/// sky has none, and every pixel's lookup within a light's radius, with any normal, falls on a
-/// face its tiles' masks hold; at 256² per face the masks leave a quarter of the faces out.
+/// sky has none, and every pixel's lookup within a light's radius, with any normal, at the side
+/// the atlas gives the receiver's face (its tiles' largest level, `shadow_atlas`), falls on a face
+/// with a level; at most 256² per face the levels leave a quarter of the faces out.
 #[test]
 fn every_lookup_within_the_radius_falls_on_a_needed_face() {
     let mut rng = Rng(12);
@@ -46,15 +57,16 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
         let tiles = tiles_of(&p, &gb.depth);
         let n_tiles = p.tiles_x * p.tiles_y;
         assert_eq!((p.tiles_x, p.tiles_y), (9, 5));
-        let masks: Vec<u32> = (0..p.casters).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| m | receiver_faces(&p, c, first, &tiles, &casters))).collect();
-        // One run per tile gives the same masks.
+        let levels: Vec<u32> = (0..p.casters).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters)))).collect();
+        // One run per tile gives the same levels.
         for c in 0..p.casters {
             let single = (0..n_tiles).fold(0, |m, t| {
                 let one = ReceiverParams { tiles_x: 1, tiles_y: t + 1, ..p };
-                m | receiver_faces(&one, c, t, &tiles, &casters)
+                merge(m, receiver_faces(&one, c, t, &tiles, &casters))
             });
-            assert_eq!(single, masks[c as usize], "caster {c}");
+            assert_eq!(single, levels[c as usize], "caster {c}");
         }
+        let masks: Vec<u32> = levels.iter().map(|&l| mask_of(l)).collect();
         let mut seen = 0;
         for i in 0..(g.width * g.height) {
             let (x, y) = (i % g.width, i / g.width);
@@ -74,8 +86,14 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
                 let light = Vec3::new(casters[4 * c], casters[4 * c + 1], casters[4 * c + 2]);
                 for _ in 0..2 {
                     let normal = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::Y);
-                    let d = lookup(light, pos, normal, res);
-                    if (light - pos).length() <= casters[4 * c + 3] && d.length() > 1e-6 {
+                    if (light - pos).length() > casters[4 * c + 3] {
+                        continue;
+                    }
+                    let at = cube_face(pos - light);
+                    let level = packed_level(levels[c], at);
+                    assert!(level != 0, "res {res}: pixel ({x}, {y})'s own face {at} of caster {c} has no level");
+                    let d = lookup(light, pos, normal, face_side(level, 0, res));
+                    if d.length() > 1e-6 {
                         seen += 1;
                         let f = cube_face(d);
                         assert!(masks[c] & (1 << f) != 0, "res {res}: pixel ({x}, {y}) looks caster {c} up on face {f}, not in its mask {:06b}", masks[c]);
@@ -106,7 +124,7 @@ fn casters_far_from_every_receiver_keep_no_face() {
     let inside = view_position(&g, 5, 5, distance_from_depth(g.near, gb.depth[5 * 40 + 5]));
     let casters = [0.0, 0.0, 500.0, 10.0, inside.x, inside.y, inside.z, 0.5];
     let n = p.tiles_x * p.tiles_y;
-    let mask = |c| (0..n).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| m | receiver_faces(&p, c, first, &tiles, &casters));
+    let mask = |c| mask_of((0..n).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters))));
     assert_eq!(mask(0), 0);
     assert_eq!(mask(1), 63);
 }

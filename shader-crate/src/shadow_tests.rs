@@ -9,21 +9,40 @@ fn range(rng: &mut Rng, a: f32, b: f32) -> f32 {
 /// Texels per face side of the maps built here.
 const RES: u32 = 64;
 
+/// The face table of `lights` lights whose slots follow the header: light `l` casts shadows
+/// from slot `slots[l]` (or not, [`NO_SHADOW`]); every slot's six faces of `res` texels lie one
+/// after another from texel 0 of the atlas, slot-major.
+pub(crate) fn uniform_slots(res: u32, filter: u32, slots: &[u32]) -> Vec<u32> {
+    let table = SHADOW_HEADER_WORDS + slots.len() as u32;
+    let mut s = vec![res, filter, table, 0];
+    s.extend_from_slice(slots);
+    let maps = slots.iter().filter(|&&m| m != NO_SHADOW).count() as u32;
+    for m in 0..maps * FACES {
+        s.extend([m * res * res, res]);
+    }
+    s
+}
+
 /// A cube map of `RES` built independently of the raster pass: each texel holds the distance
 /// along its centre's ray to the nearest of `hit`'s surfaces (`hit(origin, dir)` → distance or
 /// infinity), as the raster pass stores the surface at the texel's centre.
 fn cube_map(light: Vec3, hit: impl Fn(Vec3, Vec3) -> f32) -> Vec<u32> {
-    let mut map = vec![NO_OCCLUDER; (FACES * RES * RES) as usize];
+    cube_map_of(light, RES, &hit)
+}
+
+/// [`cube_map`] with faces of `res` texels per side.
+fn cube_map_of(light: Vec3, res: u32, hit: &dyn Fn(Vec3, Vec3) -> f32) -> Vec<u32> {
+    let mut map = vec![NO_OCCLUDER; (FACES * res * res) as usize];
     for f in 0..FACES {
         let (right, up, forward) = face_axes(f);
-        for y in 0..RES {
-            for x in 0..RES {
-                let u = (x as f32 + 0.5) / RES as f32 * 2.0 - 1.0;
-                let v = (y as f32 + 0.5) / RES as f32 * 2.0 - 1.0;
+        for y in 0..res {
+            for x in 0..res {
+                let u = (x as f32 + 0.5) / res as f32 * 2.0 - 1.0;
+                let v = (y as f32 + 0.5) / res as f32 * 2.0 - 1.0;
                 let dir = (forward + right * u + up * v).normalize();
                 let t = hit(light, dir);
                 if t.is_finite() {
-                    map[((f * RES + y) * RES + x) as usize] = t.to_bits();
+                    map[((f * res + y) * res + x) as usize] = t.to_bits();
                 }
             }
         }
@@ -68,6 +87,13 @@ fn the_raster_clip_position_and_the_lookup_agree_on_every_texel() {
         let (x, y) = face_texel(d, f, RES);
         let viewport = ((clip.x / clip.w + 1.0) * 0.5 * RES as f32, (clip.y / clip.w + 1.0) * 0.5 * RES as f32);
         assert!((viewport.0 - x).abs() < 1e-3 && (viewport.1 - y).abs() < 1e-3, "{d}: {viewport:?} against {:?}", (x, y));
+        // A smaller face in the corner of a larger render area: the same texel.
+        for (res, area) in [(8, 64), (32, 256), (RES, RES)] {
+            let (x, y) = face_texel(d, f, res);
+            let c = face_area_clip(clip, res, area);
+            let viewport = ((c.x / c.w + 1.0) * 0.5 * area as f32, (c.y / c.w + 1.0) * 0.5 * area as f32);
+            assert!((viewport.0 - x).abs() < 1e-3 && (viewport.1 - y).abs() < 1e-3, "{d} at {res} of {area}: {viewport:?} against {:?}", (x, y));
+        }
     }
     // No near plane: a point a hair in front of the light stays inside the depth range; one
     // behind the face's plane is outside its pyramid.
@@ -100,7 +126,7 @@ fn a_square_shadows_exactly_its_projection_on_a_floor() {
         for i in 0..=160 {
             for k in 0..=160 {
                 let p = Vec3::new(-8.0 + 0.1 * i as f32, 0.0, -8.0 + 0.1 * k as f32);
-                let v = cube_visibility(&map, 0, RES, filter, light, p, up);
+                let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, p, up);
                 // The edge band: texels of the occluder's edge seen from the light, plus the
                 // bias rule's offset (module docs), both a few texels at the floor.
                 let texel = 2.0 * (light - p).length() / RES as f32;
@@ -143,7 +169,7 @@ fn tilted_planes_do_not_shadow_themselves() {
             }
         });
         for filter in [SHADOW_FILTER_NEAREST, SHADOW_FILTER_BILINEAR] {
-            let v = cube_visibility(&map, 0, RES, filter, light, p, n);
+            let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, p, n);
             assert_eq!(v, 1.0, "a plane {:.0}° from the light at distance {:.2} shadows itself (filter {filter})", angle.to_degrees(), (light - p).length());
         }
     }
@@ -151,7 +177,7 @@ fn tilted_planes_do_not_shadow_themselves() {
 
 #[test]
 fn lights_without_a_slot_and_no_shadows_reach_everything() {
-    let slots = [16, SHADOW_FILTER_NEAREST, 0, 0, NO_SHADOW, 0];
+    let slots = uniform_slots(16, SHADOW_FILTER_NEAREST, &[NO_SHADOW, 0]);
     // Slot 0's map says "occluded right at the light" everywhere.
     let maps = vec![0f32.to_bits(); (FACES * 16 * 16) as usize];
     let s = CubeShadows { slots: &slots, maps: &maps };
@@ -179,11 +205,48 @@ fn the_bilinear_filter_blends_across_an_edge() {
     let mut partial = 0;
     for i in 0..=200 {
         let p = Vec3::new(-0.5 + 0.005 * i as f32, 0.0, 0.3);
-        let v = cube_visibility(&map, 0, RES, SHADOW_FILTER_BILINEAR, light, p, Vec3::Y);
+        let v = cube_visibility(&map, &uniform_slots(RES, SHADOW_FILTER_BILINEAR, &[0]), 0, SHADOW_FILTER_BILINEAR, light, p, Vec3::Y);
         assert!(v >= last - 1e-6, "visibility falls from {last} to {v} at {p}");
         partial += usize::from(v > 0.0 && v < 1.0);
         last = v;
     }
     assert_eq!(last, 1.0);
     assert!(partial >= 5, "{partial} points in the filtered edge");
+}
+
+/// Faces of different sides in one atlas: each lookup reads its own face at its own side, the
+/// same as a map of that side alone; a face without texels lets the light through where the
+/// receiver lies in it, and is replaced by the receiver's face where only the offset reaches it.
+#[test]
+fn faces_of_different_sides_look_up_their_own_texels() {
+    let light = Vec3::new(0.0, 3.0, 0.0);
+    let hit = |o: Vec3, d: Vec3| square_y(o, d, 1.5, 0.5).min(plane_y(o, d, 0.0));
+    let sides = [16u32, 8, 32, 64, 16, 8];
+    // The atlas: face f of side sides[f], one after another; and each side's uniform map.
+    let mut atlas = vec![];
+    let mut slots = vec![64, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS + 1, 0, 0];
+    for (f, &side) in sides.iter().enumerate() {
+        let whole = cube_map_of(light, side, &hit);
+        slots.extend([atlas.len() as u32, side]);
+        atlas.extend_from_slice(&whole[f * (side * side) as usize..(f + 1) * (side * side) as usize]);
+    }
+    let mut rng = Rng(3);
+    for _ in 0..2_000 {
+        let p = Vec3::new(range(&mut rng, -4.0, 4.0), 0.0, range(&mut rng, -4.0, 4.0));
+        let got = cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, p, Vec3::Y);
+        let at = cube_face(p - light);
+        let side = sides[at as usize];
+        let want = cube_visibility(&cube_map_of(light, side, &hit), &uniform_slots(side, SHADOW_FILTER_NEAREST, &[0]), 0, SHADOW_FILTER_NEAREST, light, p, Vec3::Y);
+        // Near a seam the offset may cross into a face of another side: skip those points.
+        let texel = 2.0 * (light - p).length() / side as f32;
+        if cube_face(p + Vec3::Y * (NORMAL_OFFSET_TEXELS * texel) - light) == at {
+            assert_eq!(got, want, "{p} on face {at} of side {side}");
+        }
+    }
+    // Face 3 (−y, towards the floor) without texels: the floor below the light is lit.
+    let mut bare = slots.clone();
+    let w = (SHADOW_HEADER_WORDS + 1 + 3 * FACE_WORDS) as usize;
+    bare[w + 1] = 0;
+    assert_eq!(cube_visibility(&atlas, &bare, 0, SHADOW_FILTER_NEAREST, light, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 1.0);
+    assert_eq!(cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 0.0, "under the square");
 }

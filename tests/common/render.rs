@@ -22,6 +22,7 @@ pub fn settings(width: u32, height: u32, technique: Technique) -> Settings {
         frames: 0,
         read_back: false,
         bvh_branching: 0,
+        morton_bits: 0,
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),

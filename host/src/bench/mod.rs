@@ -279,6 +279,7 @@ pub fn settings_of(a: &BenchArgs, t: Technique) -> Settings {
         frames: a.frames,
         read_back: true,
         bvh_branching: 0,
+        morton_bits: 0,
         async_compute: true,
         sort: Default::default(),
         fp_lists: Default::default(),

@@ -1,6 +1,7 @@
 //! The light BVH of `clustered-bvh` (`shaders::light_bvh`): Morton keys of the view-space lights
-//! → GPU sort, radix or bitonic (key = 30-bit Morton code, value = light index) → the lights'
-//! spheres gathered into sorted order → node boxes built level by level, bottom-up, with
+//! → GPU sort, radix or bitonic (key = Morton code of `3·b` bits, `b` ≤ 10 bits per axis
+//! ([`LightBvh::morton_bits`]); value = light index) → the lights' spheres gathered into sorted
+//! order → node boxes built level by level, bottom-up, with
 //! `branching` (32 or 64) children per node. Memory: 4 B keys + 4 B order + 16 B sphere per
 //! light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
 use super::sort::{LightSorter, SortKind};
@@ -21,6 +22,29 @@ pub struct LightBvh {
     pub nodes: Buffer,
     sort: LightSorter,
     quantizers: MortonParams,
+    /// Bits per axis of the Morton keys (`--morton-bits`): the radix sort orders `3·b` bits, a
+    /// pass per 8 of them (24 bits: three passes, 30: four).
+    pub morton_bits: u32,
+}
+
+/// Bits per axis of the lights' Morton keys unless `--morton-bits` says otherwise.
+pub const DEFAULT_MORTON_BITS: u32 = MORTON30_BITS;
+
+/// The bits per axis a `--morton-bits` setting asks (0: [`DEFAULT_MORTON_BITS`]).
+pub fn morton_bits(setting: u32) -> u32 {
+    if setting == 0 {
+        DEFAULT_MORTON_BITS
+    } else {
+        setting
+    }
+}
+
+/// Checks `--morton-bits`.
+pub fn check_morton_bits(bits: u32) -> anyhow::Result<()> {
+    if !(1..=MORTON30_BITS).contains(&bits) {
+        anyhow::bail!("--morton-bits {bits}: bits per axis of the lights' Morton keys must be in 1..={MORTON30_BITS}");
+    }
+    Ok(())
 }
 
 impl LightBvh {
@@ -33,9 +57,11 @@ impl LightBvh {
     }
 
     /// Buffers for `lights` (view space: the quantiser spans their positions) and a tree of
-    /// `branching` (32 or 64) children per node, lights ordered by the `sort` kind of sort.
-    pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32, sort: SortKind) -> VkResult<Self> {
+    /// `branching` (32 or 64) children per node, lights ordered by the `sort` kind of sort on
+    /// Morton keys of `morton_bits` bits per axis (1..=10).
+    pub fn new(gpu: &Gpu, lights: &[PointLight], branching: u32, sort: SortKind, morton_bits: u32) -> VkResult<Self> {
         assert!(valid_branching(branching), "BVH branching {branching}: 32 or 64 (checked by the caller)");
+        assert!((1..=MORTON30_BITS).contains(&morton_bits), "Morton bits {morton_bits} (checked by the caller)");
         let n = lights.len() as u32;
         let (lo, hi) = position_bounds(lights);
         let nodes = total_nodes(n.max(1), branching);
@@ -48,7 +74,8 @@ impl LightBvh {
             spheres: Buffer::storage(ctx, "sorted light spheres", 16 * n.max(1) as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
             sort: LightSorter::new(gpu, sort, n.max(1))?,
-            quantizers: quantizers(lo, hi, n),
+            quantizers: quantizers(lo, hi, n, morton_bits),
+            morton_bits,
         })
     }
 
@@ -56,7 +83,7 @@ impl LightBvh {
     /// new view-space positions.
     pub fn requantize(&mut self, lights: &[PointLight]) {
         let (lo, hi) = position_bounds(lights);
-        self.quantizers = quantizers(lo, hi, self.n);
+        self.quantizers = quantizers(lo, hi, self.n, self.morton_bits);
     }
 
     pub fn bytes(&self) -> u64 {
@@ -74,7 +101,7 @@ impl LightBvh {
             return Ok(());
         }
         rec.pass("morton keys", |rec| rec.dispatch_linear(k.light_keys.get(effects)?, &[lights, &self.keys, &self.order], &self.quantizers, n))?;
-        rec.pass("light sort", |rec| self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * MORTON30_BITS))?;
+        rec.pass("light sort", |rec| self.sort.record(gpu, rec, &self.keys, &self.order, n, 3 * self.morton_bits))?;
         rec.pass("bvh build", |rec| {
             let b = self.branching;
             let leaves = level_nodes(n, 0, b);
@@ -92,9 +119,16 @@ impl LightBvh {
     }
 }
 
-/// Bounds of the lights' positions, which the Morton quantiser spans (the unit box for none).
-fn quantizers(lo: [f32; 3], hi: [f32; 3], count: u32) -> MortonParams {
-    MortonParams { q30: MortonQuantizer::new(lo, hi, MORTON30_BITS), q63: MortonQuantizer::new(lo, hi, MORTON63_BITS), count, _pad: [0; 3] }
+/// The key kernel's quantisers for lights within `lo..=hi`, `bits` per axis of the 30-bit code:
+/// the kernel quantises into 2^10 cells per axis, so for fewer bits the scale `2^bits / extent`
+/// shrinks by 2^−20 (far above the rounding of `(p − min) · scale`), which keeps every cell
+/// below 2^bits and the key below 2^(3·bits).
+fn quantizers(lo: [f32; 3], hi: [f32; 3], count: u32, bits: u32) -> MortonParams {
+    let mut q30 = MortonQuantizer::new(lo, hi, bits);
+    if bits < MORTON30_BITS {
+        q30.scale = q30.scale.map(|s| s * (1.0 - 1.0 / (1 << 20) as f32));
+    }
+    MortonParams { q30, q63: MortonQuantizer::new(lo, hi, MORTON63_BITS), count, _pad: [0; 3] }
 }
 
 fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
@@ -138,4 +172,37 @@ pub fn build_cpu(lights: &[PointLight], branching: u32) -> (Vec<u32>, Vec<LightS
         }
     }
     (order, spheres, nodes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With `b` bits per axis every light's key (the key kernel's own function) stays below
+    /// `2^(3b)`, the corners of the box included, and the 24-bit keys keep the 30-bit keys' order
+    /// but for points within a rounding of a cell's boundary (the scales differ by 2^−20).
+    #[test]
+    fn keys_of_fewer_bits_stay_below_their_width_and_keep_the_order() {
+        let mut x = 0x2545_f491u32;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        };
+        let (lo, hi) = ([-3.0, 0.5, -40.0], [7.0, 0.5 + 1e-3, -0.1]);
+        let mut points: Vec<[f32; 3]> = (0..20_000).map(|_| std::array::from_fn(|a| lo[a] + (hi[a] - lo[a]) * next())).collect();
+        points.extend([lo, hi, [hi[0], lo[1], hi[2]]]);
+        for bits in 1..=MORTON30_BITS {
+            let q = quantizers(lo, hi, 1, bits).q30;
+            for p in &points {
+                let key = q.morton30_of(*p);
+                assert!(key < 1 << (3 * bits), "{bits} bits: {p:?} has key {key:#x}");
+            }
+        }
+        let (q8, q10) = (quantizers(lo, hi, 1, 8).q30, quantizers(lo, hi, 1, 10).q30);
+        let mut by_fine: Vec<&[f32; 3]> = points.iter().collect();
+        by_fine.sort_by_key(|p| q10.morton30_of(**p));
+        assert!(by_fine.windows(2).filter(|w| q8.morton30_of(*w[0]) > q8.morton30_of(*w[1])).count() < points.len() / 100, "the 24-bit keys mostly follow the 30-bit order");
+    }
 }

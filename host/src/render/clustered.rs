@@ -119,7 +119,9 @@ impl Clustered {
             b if shaders::light_bvh::valid_branching(b) => b,
             b => bail!("BVH branching {b}: 32 or 64"),
         };
-        let bvh = LightBvh::new(gpu, f.lights_view, branching, s.sort).context("allocating the light BVH")?;
+        let morton_bits = super::bvh::morton_bits(s.morton_bits);
+        super::bvh::check_morton_bits(morton_bits)?;
+        let bvh = LightBvh::new(gpu, f.lights_view, branching, s.sort, morton_bits).context("allocating the light BVH")?;
         Self::new(gpu, f, Some(bvh))
     }
 

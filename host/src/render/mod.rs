@@ -188,6 +188,9 @@ pub struct Settings {
     /// Children per light-BVH node (32 or 64); 0: the device default
     /// ([`bvh::LightBvh::default_branching`]).
     pub bvh_branching: u32,
+    /// Bits per axis of the light BVH's Morton keys (1..=10, `bvh::LightBvh::morton_bits`); 0:
+    /// [`bvh::DEFAULT_MORTON_BITS`].
+    pub morton_bits: u32,
     /// Run the light sort + BVH build on the async-compute queue when the device has one.
     pub async_compute: bool,
     /// GPU sort of the lights' Morton keys (`clustered-bvh`).

@@ -5,10 +5,12 @@
 //! 1. the maps cleared to "no occluder" and the draw's arguments to zero;
 //! 2. the faces with receivers (`shaders::shadow_receivers`, [`ShadowFaces::Receivers`]): the
 //!    G-buffer's tiles of 16² pixels as two spheres each, tested against every caster's faces;
-//!    each caster keeps the faces the frame's pixels look up;
-//! 3. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
+//!    each face the frame's pixels look up keeps the resolution level they ask;
+//! 3. the atlas (`shaders::shadow_atlas`): the faces counted per level, then each given its side
+//!    (halved as often as the atlas needs) and its first texel in the face table;
+//! 4. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
 //!    an entry per face with receivers its bounding sphere meets within the light's radius;
-//! 4. the arguments kernel, then every entry's triangles into its face: by default one indirect
+//! 5. the arguments kernel, then every entry's triangles into its face: by default one indirect
 //!    dispatch of the compute rasteriser (`shaders::shadow_raster`, a workgroup per entry), or
 //!    with [`ShadowRaster::Draw`] one indirect draw through the fixed-function rasteriser (the
 //!    two write the same texels; `docs/results/h200/shadows/` measures them side by side).
@@ -16,16 +18,17 @@
 //! Techniques that render shadows bind [`ShadowMaps::slots`] and [`ShadowMaps::maps`] beside
 //! their lights (`FrameInputs::shadow_buffers`).
 //!
-//! Every shadow-casting light gets a whole map at [`ShadowSettings::resolution`]: Olsson et al.'s
-//! virtual cube shadow maps without their page table (no per-face resolution choice). Where the
-//! maps would pass the device's largest storage binding, the resolution halves until they fit,
-//! and `--stats` and `render` say so ([`ShadowStats::degraded_from`]); no caster is dropped.
+//! Each face gets the side its receivers ask, at most [`ShadowSettings::resolution`], in one
+//! atlas shared by all casters ([`ShadowSettings::atlas_bytes`]; by default room for every face at
+//! the largest side, within the device's largest storage binding). A frame whose faces ask for
+//! more than the atlas holds halves every side until they fit, and `--stats` and `render` say so
+//! ([`ShadowStats::shift`]); no caster or face is dropped.
 //!
-//! Memory: the maps (`shaders::shadow`), 12 B per opaque triangle (its indices in the batches'
+//! Memory: the atlas (`shaders::shadow`), 12 B per opaque triangle (its indices in the batches'
 //! order, [`shadow_triangles`]), 32 B per batch (0.5 B per triangle), 8 B per entry
 //! (counted on the host when the lights or the camera move: [`count_entries`], an upper bound
-//! that ignores the receivers), 16 B per caster record and 4 B per caster of faces with
-//! receivers, 32 B per 16² pixels of receiver tiles.
+//! that ignores the receivers), 16 B per caster record, 4 B per caster face of levels and 8 B of
+//! face table, 32 B per 16² pixels of receiver tiles.
 use super::gbuffer::{Draw, Geometry};
 use crate::gpu::Gpu;
 use crate::vk::{Attachment, Binding, Buffer, ComputePipeline, Context, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
@@ -33,7 +36,8 @@ use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
 use shaders::shadow_raster::ShadowRasterParams;
-use shaders::shadow::{caster_record, ShadowParams, FACES, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow::{caster_record, ShadowParams, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow_atlas::{cap_level, handles as atlas_handles, AtlasParams, ARGS_SHIFT, ARGS_USED, MIN_SIDE};
 use shaders::layout::ClusterGrid;
 use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
 use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_DISPATCH, ARGS_FACES, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
@@ -44,8 +48,6 @@ pub const DEFAULT_RESOLUTION: u32 = 256;
 pub const MAX_RESOLUTION: u32 = 4096;
 /// The most shadow-casting lights: the cull dispatches one row of workgroups per caster.
 pub const MAX_CASTERS: usize = shaders::indirect::MAX_GROUPS_PER_AXIS as usize;
-/// The smallest face side the maps degrade to where the requested one does not fit.
-pub const MIN_DEGRADED_RESOLUTION: u32 = 8;
 
 /// How the lookup filters (`--shadow-filter`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -79,18 +81,22 @@ pub enum ShadowRaster {
 /// Which faces of the casters' cube maps get triangles (`--shadow-faces`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum ShadowFaces {
-    /// Only faces that pixels of the frame look up (`shaders::shadow_receivers`).
+    /// Only faces that pixels of the frame look up (`shaders::shadow_receivers`), each at the
+    /// side its receivers ask.
     #[default]
     Receivers,
-    /// Every face a batch's sphere meets within the light's radius.
+    /// Every face a batch's sphere meets within the light's radius, each at the largest side.
     All,
 }
 
 /// The shadow maps' knobs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShadowSettings {
-    /// Texels per face side.
+    /// The largest side of a face in texels (each face gets what its receivers ask, up to this).
     pub resolution: u32,
+    /// Bytes of the atlas the faces share (`--shadow-atlas`); `None`: room for every face at
+    /// [`Self::resolution`], within the device's largest storage binding.
+    pub atlas_bytes: Option<u64>,
     pub filter: ShadowFilter,
     pub raster: ShadowRaster,
     pub faces: ShadowFaces,
@@ -98,7 +104,7 @@ pub struct ShadowSettings {
 
 impl Default for ShadowSettings {
     fn default() -> Self {
-        Self { resolution: DEFAULT_RESOLUTION, filter: ShadowFilter::default(), raster: ShadowRaster::default(), faces: ShadowFaces::default() }
+        Self { resolution: DEFAULT_RESOLUTION, atlas_bytes: None, filter: ShadowFilter::default(), raster: ShadowRaster::default(), faces: ShadowFaces::default() }
     }
 }
 
@@ -114,9 +120,13 @@ pub fn check_resolution(res: u32) -> Result<()> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ShadowStats {
     pub casters: usize,
-    /// Texels per face side drawn, and the requested side where that had to be lower.
+    /// The largest side of a face.
     pub resolution: u32,
-    pub degraded_from: Option<u32>,
+    /// Texels of the atlas, those the last frame's faces took, and how often the atlas halved
+    /// every face's side in it (0: each face had the side its receivers asked).
+    pub atlas_texels: u32,
+    pub atlas_used: u32,
+    pub shift: u32,
     /// Batches of triangles the batches' cull sent to faces in the last frame, and the triangles
     /// of the scene's opaque draws per face at most (batches × 64 × 6 per caster).
     pub entries: u32,
@@ -136,22 +146,27 @@ pub fn check_casters(casters: usize) -> Result<()> {
 
 /// The frame's cube shadow maps.
 pub struct ShadowMaps {
+    levels_pipe: ComputePipeline<AtlasParams>,
+    alloc_pipe: ComputePipeline<AtlasParams>,
     cull: ComputePipeline<ShadowCullParams>,
     args_pipe: ComputePipeline<ShadowCullParams>,
     /// The receivers' tiles and faces (`None`: every face, [`ShadowFaces::All`]).
     receivers: Option<Receivers>,
-    /// Per caster, the faces with receivers (all six set with [`ShadowFaces::All`]).
+    /// Per caster face, the level its receivers ask (`shaders::shadow_atlas`; 0: none; every
+    /// face at the largest side with [`ShadowFaces::All`]).
     needed: Buffer,
     /// What writes the entries' triangles: the compute rasteriser, or the draw and its render area
-    /// (`res × res`, never tested or written).
+    /// (the largest side squared, never tested or written).
     writer: Writer,
-    /// The resolution drawn (the requested one, or lower where it did not fit) and the filter.
     settings: ShadowSettings,
-    /// The requested resolution where the maps had to drop below it.
-    degraded_from: Option<u32>,
+    /// Texels of the atlas, and the last frame's texels taken and shift.
+    atlas_texels: u32,
+    used: u32,
+    shift: u32,
     /// Light index of each caster, in slot order.
     casters: Vec<u32>,
-    /// `[res, filter, 0, 0]`, then each light's slot or `NO_SHADOW`.
+    /// `[largest side, filter, table, 0]`, each light's slot or `NO_SHADOW`, then the face table
+    /// (`shaders::shadow::face_entry`, written by the atlas's allocation every frame).
     pub slots: Buffer,
     /// Each caster's view-space position and radius (cull and raster).
     records: Buffer,
@@ -174,7 +189,7 @@ pub struct ShadowMaps {
     entries: Buffer,
     /// The indirect draw's arguments and the entries counted (`shaders::shadow_cull::ARGS_WORDS`).
     args: Buffer,
-    /// Slot-major, face-major, row-major distances.
+    /// The atlas: each face's distances, row-major from its first texel.
     pub maps: Buffer,
 }
 
@@ -207,14 +222,15 @@ impl ShadowMaps {
             bail!("{} shadow flags for {} lights", casters.len(), lights_view.len());
         }
         check_casters(list.len())?;
-        let (resolution, bytes) = fitting_resolution(ctx, settings.resolution, list.len())?;
-        let degraded_from = (resolution != settings.resolution).then_some(settings.resolution);
-        let settings = ShadowSettings { resolution, ..settings };
-        let mut slots = vec![settings.resolution, settings.filter.code(), 0, 0];
+        let atlas_texels = atlas_texels(ctx, &settings, list.len())?;
+        let faces = FACES as usize * list.len();
+        let table = SHADOW_HEADER_WORDS + lights_view.len() as u32;
+        let mut slots = vec![settings.resolution, settings.filter.code(), table, 0];
         slots.extend(std::iter::repeat_n(NO_SHADOW, lights_view.len()));
         for (slot, &l) in list.iter().enumerate() {
             slots[(SHADOW_HEADER_WORDS + l) as usize] = slot as u32;
         }
+        slots.extend(std::iter::repeat_n(0, FACE_WORDS as usize * faces));
         let order = shadow_triangles(positions, indices, draws);
         let (batch_words, spheres) = batches(positions, &order);
         let records_cpu = records(&list, lights_view);
@@ -238,10 +254,12 @@ impl ShadowMaps {
             ShadowFaces::All => None,
         };
         let needed = match receivers {
-            Some(_) => Buffer::storage(ctx, "shadow faces with receivers", 4 * list.len() as u64)?,
-            None => Buffer::from_slice(ctx, "shadow faces with receivers", &vec![(1u32 << FACES) - 1; list.len()])?,
+            Some(_) => Buffer::storage(ctx, "shadow face levels", 4 * faces as u64)?,
+            None => Buffer::from_slice(ctx, "shadow face levels", &vec![cap_level(settings.resolution).max(1); faces])?,
         };
         let maps = Self {
+            levels_pipe: ComputePipeline::new(ctx, &gpu.compute_module, atlas_handles::SHADOW_FACE_LEVELS)?,
+            alloc_pipe: ComputePipeline::new(ctx, &gpu.compute_module, atlas_handles::SHADOW_FACE_ALLOC)?,
             cull: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_CULL)?,
             args_pipe: ComputePipeline::new(ctx, &gpu.compute_module, handles::SHADOW_DRAW_ARGS)?,
             writer,
@@ -249,7 +267,9 @@ impl ShadowMaps {
             needed,
             faces: 0,
             settings,
-            degraded_from,
+            atlas_texels,
+            used: 0,
+            shift: 0,
             records: Buffer::from_slice(ctx, "shadow caster records", &records_cpu)?,
             records_cpu,
             casters: list,
@@ -263,7 +283,7 @@ impl ShadowMaps {
             counted: 0,
             entries: entry_buffer(ctx, capacity)?,
             args: Buffer::storage(ctx, "shadow draw arguments", 4 * ARGS_WORDS as u64)?,
-            maps: Buffer::storage(ctx, "shadow maps", bytes).context("allocating the shadow maps")?,
+            maps: Buffer::storage(ctx, "shadow maps", 4 * atlas_texels as u64).context("allocating the shadow atlas")?,
         };
         Ok(Some(maps))
     }
@@ -302,8 +322,7 @@ impl ShadowMaps {
     /// host's widened count rules out): triangles would be missing from the maps.
     pub fn check_entries(&mut self) -> Result<()> {
         let args: Vec<u32> = self.args.read(ARGS_WORDS as usize)?;
-        self.counted = args[ARGS_COUNTED];
-        self.faces = if self.receivers.is_some() { args[ARGS_FACES] } else { FACES * self.casters.len() as u32 };
+        (self.counted, self.faces, self.used, self.shift) = (args[ARGS_COUNTED], args[ARGS_FACES], args[ARGS_USED], args[ARGS_SHIFT]);
         if args[ARGS_COUNTED] > self.capacity {
             bail!("the shadow cull counted {} entries against the {} the host counted: shadow-map triangles would be missing", args[ARGS_COUNTED], self.capacity);
         }
@@ -315,19 +334,28 @@ impl ShadowMaps {
         self.casters.len()
     }
 
-    /// The settings drawn (the resolution possibly below the requested one).
+    /// The settings drawn.
     pub fn settings(&self) -> ShadowSettings {
         self.settings
     }
 
     /// What `--stats` reports.
     pub fn stats(&self) -> ShadowStats {
-        ShadowStats { casters: self.casters.len(), resolution: self.settings.resolution, degraded_from: self.degraded_from, entries: self.counted, batches: self.spheres.len(), faces_with_receivers: self.faces }
+        ShadowStats {
+            casters: self.casters.len(),
+            resolution: self.settings.resolution,
+            atlas_texels: self.atlas_texels,
+            atlas_used: self.used,
+            shift: self.shift,
+            entries: self.counted,
+            batches: self.spheres.len(),
+            faces_with_receivers: self.faces,
+        }
     }
 
-    /// Records the pass: clear, the faces with receivers (from the G-buffer's reversed-Z `depth`
-    /// over `grid`), cull, arguments, then every entry's triangles into the maps (one indirect
-    /// dispatch or one indirect draw).
+    /// Records the pass: clear, the faces with receivers and their levels (from the G-buffer's
+    /// reversed-Z `depth` over `grid`), the atlas, cull, arguments, then every entry's triangles
+    /// into the atlas (one indirect dispatch or one indirect draw).
     pub fn record(&self, rec: &mut Recorder<'_>, geometry: &Geometry, camera: &Buffer, depth: &Buffer, grid: ClusterGrid) -> VkResult<()> {
         rec.fill(&self.maps, NO_OCCLUDER);
         rec.fill(&self.args, 0);
@@ -337,16 +365,19 @@ impl ShadowMaps {
             let p = ReceiverParams { grid, res: self.settings.resolution, casters, tiles_x: grid.width.div_ceil(RECEIVER_TILE), tiles_y: grid.height.div_ceil(RECEIVER_TILE) };
             let tiles = p.tiles_x * p.tiles_y;
             rec.dispatch_linear(&r.tiles_pipe, &[depth, &r.tiles], &p, tiles)?;
-            rec.dispatch(&r.faces_pipe, &[&r.tiles, &self.records, &self.needed, &self.args], &p, [tiles.div_ceil(TILES_PER_INVOCATION * RECEIVER_WORKGROUP), casters, 1])?;
+            rec.dispatch(&r.faces_pipe, &[&r.tiles, &self.records, &self.needed], &p, [tiles.div_ceil(TILES_PER_INVOCATION * RECEIVER_WORKGROUP), casters, 1])?;
         }
+        let atlas = AtlasParams { faces: FACES * casters, cap: self.settings.resolution, texels: self.atlas_texels, pad: 0 };
+        rec.dispatch_linear(&self.levels_pipe, &[&self.needed, &self.args], &atlas, atlas.faces)?;
+        rec.dispatch_linear(&self.alloc_pipe, &[&self.needed, &self.args, &self.slots], &atlas, atlas.faces)?;
         let batches = self.spheres.len() as u32;
         let p = ShadowCullParams { batches, casters, capacity: self.capacity, pad: 0 };
         rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args, &self.needed], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
         rec.dispatch(&self.args_pipe, &[&self.args], &p, [1, 1, 1])?;
         match &self.writer {
             Writer::Compute(raster) => {
-                let params = ShadowRasterParams { res: self.settings.resolution, capacity: self.capacity, pad: [0; 2] };
-                let buffers = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.args, &self.maps];
+                let params = ShadowRasterParams { capacity: self.capacity, pad: [0; 3] };
+                let buffers = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.args, &self.slots, &self.maps];
                 rec.dispatch_indirect(raster, &buffers, &params, &self.args, ARGS_DISPATCH)?;
             }
             Writer::Draw { pipe, area } => {
@@ -354,7 +385,7 @@ impl ShadowMaps {
                 rec.fragments_read_earlier_writes();
                 rec.transition(area, ImageUse::Undefined, ImageUse::DepthTarget);
                 rec.begin_drawing(&[], Attachment { image: area, load: Load::ClearDepth(0.0) });
-                let bindings = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.maps].map(Binding::Buffer);
+                let bindings = [&geometry.positions, &self.indices, camera, &self.records, &self.batches, &self.entries, &self.slots, &self.maps].map(Binding::Buffer);
                 let params = ShadowParams { res: self.settings.resolution, pad: [0; 3] };
                 rec.draw_indirect(pipe, &bindings, &params, &self.args)?;
                 rec.end_rendering();
@@ -371,16 +402,28 @@ impl ShadowMaps {
     }
 }
 
-/// The largest resolution at most `requested` (halving) whose maps for `casters` fit one storage
-/// binding, and their bytes; an error where not even [`MIN_DEGRADED_RESOLUTION`] fits.
-fn fitting_resolution(ctx: &Context, requested: u32, casters: usize) -> Result<(u32, u64)> {
-    let bytes = |res: u32| 4 * FACES as u64 * res as u64 * res as u64 * casters as u64;
-    let mut res = requested;
-    while crate::vk::memory::check_range(ctx, "shadow maps", bytes(res)).is_err() && res > MIN_DEGRADED_RESOLUTION {
-        res = (res / 2).max(MIN_DEGRADED_RESOLUTION);
+/// Texels of the atlas: [`ShadowSettings::atlas_bytes`] / 4, or by default room for every face
+/// at the largest side within the device's largest storage binding; refused in one line where it
+/// cannot hold every face at [`MIN_SIDE`] (the least the atlas's shift reaches) or a requested
+/// size passes the binding.
+fn atlas_texels(ctx: &Context, settings: &ShadowSettings, casters: usize) -> Result<u32> {
+    let faces = FACES as u64 * casters as u64;
+    let side = |s: u32| s as u64 * s as u64;
+    let (least, most) = (faces * side(MIN_SIDE.min(settings.resolution)), faces * side(settings.resolution));
+    let binding = ctx.info.max_storage_buffer_range as u64 / 4;
+    let texels = match settings.atlas_bytes {
+        Some(bytes) => {
+            if bytes / 4 > binding {
+                bail!("--shadow-atlas {} MiB: the device's largest storage binding holds {} MiB", bytes >> 20, (4 * binding) >> 20);
+            }
+            (bytes / 4).min(most)
+        }
+        None => most.min(binding),
+    };
+    if texels < least {
+        bail!("{casters} shadow-casting lights need a shadow atlas of at least {} KiB ({}² texels for each of their {faces} faces); it has {} KiB", 4 * least >> 10, MIN_SIDE.min(settings.resolution), 4 * texels >> 10);
     }
-    crate::vk::memory::check_range(ctx, "shadow maps", bytes(res)).with_context(|| format!("{casters} shadow-casting lights: even at {res}² texels per face their maps pass the device's largest storage binding"))?;
-    Ok((res, bytes(res)))
+    Ok(texels as u32)
 }
 
 /// The opaque draws' triangles (the indices of each, three per triangle) in the Morton order of

@@ -36,6 +36,12 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
             "unlisted_fragments": t.unlisted, "node_bytes": t.node_bytes })),
         "resolution": [s.width, s.height],
         "tile_size": s.tile_size,
+        // Bits per axis of the light BVH's Morton keys (`--morton-bits`) and the radix passes
+        // sorting them, where the technique builds the hierarchy.
+        "light_keys": s.technique.reads(super::Knob::LightHierarchy).then(|| {
+            let bits = super::bvh::morton_bits(s.morton_bits);
+            json!({ "morton_bits": bits, "radix_passes": shaders::radix::passes(3 * bits) })
+        }),
         "slices": frame.grid.num_slices,
         "lights": lights,
         // How the light buffer stores them (`--light-record`), what it takes per light, and the
@@ -53,13 +59,15 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
             "samples": frame.samples, "edge_pixels": frame.edge_pixels,
             "bytes_per_sample": frame.bytes_per_sample,
             "gbuffer_bytes": frame.buffers.iter().find(|b| b.0 == "gbuffer").map(|b| b.1) })),
-        // Cube shadow maps, where lights cast shadows: casters, texels per face side drawn (and
-        // the requested side where the maps had to be coarser to fit), the lookup's filter, what
-        // wrote the triangles (compute kernel or draw), which faces get them and how many had
-        // receivers in the last frame, the maps' bytes, and the batches of 64 triangles the per-face cull drew of those it tested
-        // (`render::shadow_maps`).
+        // Cube shadow maps, where lights cast shadows: casters, the largest face side, the
+        // atlas's texels, those the last frame's faces took and how often the atlas halved every
+        // face's side to hold them, the lookup's filter, what wrote the triangles (compute kernel
+        // or draw), which faces get them and how many had receivers in the last frame, the
+        // atlas's bytes, and the batches of 64 triangles the per-face cull drew of those it
+        // tested (`render::shadow_maps`).
         "shadows": frame.shadows.map(|sh| json!({
-            "casters": sh.casters, "resolution": sh.resolution, "degraded_from": sh.degraded_from,
+            "casters": sh.casters, "resolution": sh.resolution,
+            "atlas_texels": sh.atlas_texels, "atlas_used_texels": sh.atlas_used, "atlas_shift": sh.shift,
             "filter": format!("{:?}", s.shadow.filter).to_lowercase(),
             "raster": format!("{:?}", s.shadow.raster).to_lowercase(),
             "faces": format!("{:?}", s.shadow.faces).to_lowercase(), "faces_with_receivers": sh.faces_with_receivers,

@@ -189,7 +189,7 @@ pub enum Knob {
     FpLists,
     /// `--unique-clusters`: how the clustered techniques find the frame's clusters.
     UniqueClusters,
-    /// `--sort` and `--bvh-branching`: the light sort and hierarchy.
+    /// `--sort`, `--bvh-branching` and `--morton-bits`: the light sort and hierarchy.
     LightHierarchy,
 }
 

@@ -207,7 +207,7 @@ impl Recorder<'_> {
                 self.bound_graphics = pipe.raw;
             }
             self.ctx.push_descriptor.cmd_push_descriptor_set(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipe.layout, 0, &writes);
-            d.cmd_push_constants(self.cmd, pipe.layout, vk::ShaderStageFlags::FRAGMENT, 0, bytemuck::bytes_of(params));
+            d.cmd_push_constants(self.cmd, pipe.layout, super::raster::PUSH_CONSTANT_STAGES, 0, bytemuck::bytes_of(params));
         }
         Ok(())
     }

@@ -9,6 +9,10 @@ use ash::vk;
 use shaders::kernels::RasterKernel;
 use std::ffi::CString;
 
+/// The stages a raster pipeline's push constants reach (a vertex stage may read them, as the
+/// shadow maps' draw does for its render area).
+pub const PUSH_CONSTANT_STAGES: vk::ShaderStageFlags = vk::ShaderStageFlags::from_raw(vk::ShaderStageFlags::VERTEX.as_raw() | vk::ShaderStageFlags::FRAGMENT.as_raw());
+
 /// Formats of render targets, named by what the renderer stores in them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TargetFormat {
@@ -130,7 +134,7 @@ impl<P> GraphicsPipeline<P> {
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&bindings);
         let set_layout = unsafe { d.create_descriptor_set_layout(&set_info, None) }.call("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::FRAGMENT).size(std::mem::size_of::<P>() as u32)];
+        let ranges = [vk::PushConstantRange::default().stage_flags(PUSH_CONSTANT_STAGES).size(std::mem::size_of::<P>() as u32)];
         let set_layouts = [set_layout];
         let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&ranges);
         let layout = match unsafe { d.create_pipeline_layout(&layout_info, None) }.call("vkCreatePipelineLayout") {
