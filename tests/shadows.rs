@@ -338,6 +338,31 @@ fn faces_take_what_their_receivers_ask_and_a_short_atlas_halves_them() {
     common::assert_clean(&gpu);
 }
 
+/// A spot light takes only the faces its cone lights: aimed past the wall and down, its cone
+/// (40° outer half-angle) meets fewer faces than the same light as a point light; aimed straight
+/// down from higher up, one face; every frame matches the ray-cast reference (which shades the cone's falloff
+/// and exact visibility).
+#[test]
+fn a_spot_light_takes_only_the_faces_its_cone_lights() {
+    let gpu = common::gpu();
+    let dir = TempDir::new("shadow-spot");
+    let point = scene_of(&dir, FLOOR_AND_WALL, &description("shadows = true\n"));
+    let (_, all) = assert_matches_reference(&gpu, &point, ShadowSettings::default(), "point light");
+    let spot = scene_of(&dir, FLOOR_AND_WALL, &description("shadows = true\ntype = \"spot\"\ndirection = [1, -0.6, 0]\nouter_angle = 40\n"));
+    assert!(spot.spots.first().is_some_and(Option::is_some), "the light is a spot light");
+    let (shadowed, cone) = assert_matches_reference(&gpu, &spot, ShadowSettings::default(), "spot light");
+    eprintln!("faces with receivers: point light {}, spot light {}", all.faces_with_receivers, cone.faces_with_receivers);
+    assert!(shadowed > 3000, "{shadowed} pixels in shadow");
+    assert!(cone.faces_with_receivers >= 1 && cone.faces_with_receivers < all.faces_with_receivers, "{cone:?} against {all:?}");
+    assert!(cone.atlas_used < all.atlas_used, "{cone:?} against {all:?}");
+    // 6 m over the floor, aimed down one face's axis with a cone narrower than the face's 45°:
+    // that face alone (the wall still shadows the floor behind it, 0 < x < 1, inside the cone).
+    let down = scene_of(&dir, FLOOR_AND_WALL, &description_at([-2.0, 6.0, 0.0], "shadows = true\ntype = \"spot\"\ndirection = [0, -1, 0]\nouter_angle = 40\n"));
+    let (_, one) = assert_matches_reference(&gpu, &down, ShadowSettings::default(), "spot light aimed down");
+    assert_eq!(one.faces_with_receivers, 1, "{one:?}");
+    common::assert_clean(&gpu);
+}
+
 /// A light over a bare floor casts shadows on nothing: the shadowed frame equals the unshadowed
 /// one within 1/255 everywhere, grazing corners included (the bias rule keeps the floor from
 /// shadowing itself).
@@ -424,7 +449,8 @@ fn render_draws_shadows_or_refuses_them() {
     let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert!(stats["shadows"].is_null() && stats["gpu_ms"]["passes"]["shadow maps"].is_null(), "{stats}");
     assert!(!stats["bytes"]["buffers"].as_object().unwrap().keys().any(|k| k.contains("shadow")), "{}", stats["bytes"]["buffers"]);
-    assert_refused(&run("tiled", &[]), "a technique without shadows", BAD_INPUT, &["1 of 1 lights cast shadows", "tiled renders no shadows"]);
+    assert_refused(&run("forward-plus", &[]), "a technique without shadows", BAD_INPUT, &["1 of 1 lights cast shadows", "forward-plus renders no shadows"]);
+    assert!(run("tiled", &[]).ok, "tiled renders shadows");
     assert_refused(&run("deferred", &["--shadow-resolution", "0"]), "a zero resolution", BAD_INPUT, &["--shadow-resolution 0"]);
     assert_refused(&run("deferred", &["--msaa", "4"]), "shadows with MSAA", BAD_INPUT, &["--msaa 4", "shadows"]);
     let r = run("deferred", &["--shadow-reference"]);
@@ -445,6 +471,6 @@ fn render_draws_shadows_or_refuses_them() {
     };
     let r = generated("deferred", "0.25");
     assert!(r.ok, "{}", r.stderr);
-    assert_refused(&generated("tiled", "0.25"), "generated shadow casters", BAD_INPUT, &["10 of 40 lights cast shadows"]);
+    assert_refused(&generated("forward-plus", "0.25"), "generated shadow casters", BAD_INPUT, &["10 of 40 lights cast shadows"]);
     assert_refused(&generated("deferred", "2"), "a fraction above 1", BAD_INPUT, &["not in [0, 1]"]);
 }

@@ -304,6 +304,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] bounds: &[f32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 12)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 13)] shadow_maps: &[u32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         let i = shading::block_pixel(wg, local, p.grid.width, p.grid.height);
@@ -317,7 +319,8 @@ specular_entries! {
             return;
         }
         let cluster_list = shading::index_range(offsets[cluster as usize], counts[cluster as usize], |t| list[t as usize]);
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list, &crate::shadow::NoShadows);
+        let shadows = crate::shadow::CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &cluster_list, &shadows);
     }
 }
 

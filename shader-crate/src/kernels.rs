@@ -150,16 +150,16 @@ pub const ASSIGN_LIGHTS_BVH: Kernel<BvhAssignParams> =
     Kernel::new("clustered_bvh::assign_lights_bvh", 11, [crate::light_bvh::WALK_WORKGROUP, 1, 1], true);
 
 // Tiled techniques (`tiled.rs`): one cooperative workgroup of 256 per screen tile.
-pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
-pub const SHADE_TILED_SPECULAR: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_specular", 8, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
+pub const SHADE_TILED_DIFFUSE: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_diffuse", 10, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
+pub const SHADE_TILED_SPECULAR: Kernel<TiledParams> = Kernel::new("tiled::shade_tiled_specular", 10, [crate::tile_cull::TILED_WORKGROUP, 1, 1], true);
 
 // Clustered-AABB technique (`clustered_aabb.rs`): fixed grid, precomputed boxes.
 pub const AABB_BOUNDS: Kernel<FrameParams> = linear("clustered_aabb::aabb_bounds", 2);
 pub const AABB_MARK: Kernel<FrameParams> = linear("clustered_aabb::aabb_mark", 4);
 pub const AABB_COMPACT: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_compact", 3, [256, 1, 1], true);
 pub const AABB_ASSIGN: Kernel<FrameParams> = Kernel::new("clustered_aabb::aabb_assign", 7, [256, 1, 1], true);
-pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_diffuse", 12);
-pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 12);
+pub const SHADE_AABB_DIFFUSE: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_diffuse", 14);
+pub const SHADE_AABB_SPECULAR: Kernel<FrameParams> = linear("clustered_aabb::shade_aabb_specular", 14);
 
 // Forward+ (`forward_plus.rs`): tiled culling into per-tile lists, `[linked, array]` (the list
 // layouts of `render --fp-lists`).

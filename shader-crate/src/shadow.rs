@@ -44,7 +44,7 @@
 //!
 //! **Memory:** the atlas (4 B per texel; `res² · 4` B per face in it: 4 KiB at 32, 256 KiB at
 //! 256), [`SHADOW_HEADER_WORDS`] + 1 word per light (the slots), [`FACE_WORDS`] words per caster
-//! face (the face table), 16 B per caster (its record).
+//! face (the face table), 32 B per caster (its record).
 use crate::layout::PointLight;
 use glam::{Vec3, Vec4};
 #[cfg(feature = "graphics")]
@@ -68,8 +68,12 @@ pub const FACE_WORDS: u32 = 2;
 pub const SHADOW_FILTER_NEAREST: u32 = 0;
 /// Four texels per lookup, weighted bilinearly (2 × 2 percentage-closer filtering).
 pub const SHADOW_FILTER_BILINEAR: u32 = 1;
-/// Words of a caster record: view-space position and radius.
-pub const CASTER_WORDS: u32 = 4;
+/// Words of a caster record: view-space position and radius, then a spot light's cone: its
+/// axis (view space, unit) and the cosine of its outer half-angle ([`NO_CONE`] for a point
+/// light).
+pub const CASTER_WORDS: u32 = 8;
+/// The cone word of a point light's record (below every cosine).
+pub const NO_CONE: f32 = -2.0;
 /// The receiver's offset along its normal, in texels at its distance (module docs).
 pub const NORMAL_OFFSET_TEXELS: f32 = 1.5;
 /// Distance tolerance of the comparison, in texels at the receiver's distance.
@@ -249,10 +253,15 @@ pub fn face_area_clip(clip: Vec4, res: u32, area: u32) -> Vec4 {
     Vec4::new(clip.x * k + (k - 1.0) * clip.w, clip.y * k + (k - 1.0) * clip.w, clip.z, clip.w)
 }
 
-/// Record of a caster for the raster pass: view-space position and radius.
+/// Record of a caster: view-space position and radius, and `cone` — a spot light's view-space
+/// unit axis and the cosine of its outer half-angle, `None` for a point light.
 #[inline]
-pub fn caster_record(l: &PointLight) -> [f32; 4] {
-    [l.position[0], l.position[1], l.position[2], l.radius]
+pub fn caster_record(l: &PointLight, cone: Option<(Vec3, f32)>) -> [f32; CASTER_WORDS as usize] {
+    let (axis, cos_outer) = match cone {
+        Some(c) => c,
+        None => (Vec3::ZERO, NO_CONE),
+    };
+    [l.position[0], l.position[1], l.position[2], l.radius, axis.x, axis.y, axis.z, cos_outer]
 }
 
 /// Push constants of the raster pass: the render area's side (the largest face side; each face

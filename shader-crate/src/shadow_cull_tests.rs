@@ -1,5 +1,5 @@
 use super::*;
-use crate::shadow::{cube_face, CASTER_WORDS};
+use crate::shadow::{cube_face, CASTER_WORDS, NO_CONE};
 use crate::test_support::Rng;
 
 /// The batch words (`BATCH_WORDS` each) of `n_tris` triangles stored corner after corner in
@@ -91,7 +91,7 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
     // A rotation as the camera's view.
     let view = Mat4::from_rotation_y(0.7) * Mat4::from_rotation_x(-0.3);
     let lights: Vec<(Vec3, f32)> = (0..6).map(|_| (Vec3::new(range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0)), range(&mut rng, 2.0, 7.0))).collect();
-    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r]).collect();
+    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r, 0.0, 0.0, 0.0, NO_CONE]).collect();
     assert_eq!(casters.len() as u32, CASTER_WORDS * lights.len() as u32);
     let run = |capacity: u32| {
         let p = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity, pad: 0 };

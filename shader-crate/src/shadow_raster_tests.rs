@@ -181,7 +181,7 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     let batches = batch_words(&positions, n_tris);
     let view = Mat4::from_rotation_z(0.4) * Mat4::from_rotation_x(1.1);
     let lights: Vec<(Vec3, f32)> = (0..4).map(|_| (random_vec(&mut rng, 3.0), range(&mut rng, 3.0, 9.0))).collect();
-    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r]).collect();
+    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r, 0.0, 0.0, 0.0, crate::shadow::NO_CONE]).collect();
     let cull = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity: 1000, pad: 0 };
     let mut entries = vec![0u32; (ENTRY_WORDS * cull.capacity) as usize];
     let mut args = [0u32; ARGS_WORDS as usize];

@@ -12,7 +12,10 @@
 //! 2. **Faces** ([`shadow_receiver_faces`], one invocation per caster and run of
 //!    [`TILES_PER_INVOCATION`] tiles, [`receiver_faces`]): each tile's sphere, widened by the
 //!    lookup's normal offset ([`lookup_reach`]), through `shadow_cull::face_mask` against the
-//!    caster; each face met keeps the largest resolution level its receivers ask
+//!    caster (none where it lies outside a spot light's cone, [`sphere_meets_cone`], and only
+//!    the faces the cone, widened by the lookup's offset, meets, [`spot_faces`]: a spot light
+//!    takes only faces its cone lights); each face met keeps the largest resolution level its
+//!    receivers ask
 //!    (`shadow_atlas::receiver_level`) in its word of `needed` (an atomic maximum; 0: none).
 //!
 //! **Conservative:** a pixel's lookup direction `pos + n·offset − light` lies within its tile's
@@ -154,7 +157,9 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
             let far = d.length() + r;
             let g = &p.grid;
             let level = receiver_level(centre, r, light, g.near, g.height, g.tan_half_fov_y, p.res);
-            let mask = face_mask(d, r + lookup_reach(far, face_side(level, 0, p.res)), radius + CULL_MARGIN * far);
+            let widened = r + lookup_reach(far, face_side(level, 0, p.res));
+            let axis = Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]);
+            let mask = if sphere_meets_cone(d, widened, axis, casters[k + 7]) { face_mask(d, widened, radius + CULL_MARGIN * far) & spot_faces(d, r, widened - r, axis, casters[k + 7]) } else { 0 };
             let mut f = 0;
             while f < FACES {
                 if mask & (1 << f) != 0 && packed_level(levels, f) < level {
@@ -166,6 +171,108 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
         t += 1;
     }
     levels
+}
+
+/// Whether a sphere at offset `d` from a spot light, of radius `r`, may hold a point inside the
+/// cone of unit `axis` and outer half-angle `acos(cos_outer)` (always for a point light,
+/// `cos_outer` = [`NO_CONE`](crate::shadow::NO_CONE)): the angle between `d` and the axis is at
+/// most the half-angle plus the sphere's angular radius `asin(r / |d|)`, with a margin of
+/// [`CONE_MARGIN`] radians for rounding. A receiver outside its light's cone gets no light from
+/// it (the spot falloff ends at the outer angle), so its faces need no texels.
+#[inline]
+pub fn sphere_meets_cone(d: Vec3, r: f32, axis: Vec3, cos_outer: f32) -> bool {
+    let len = d.length();
+    if !(cos_outer >= -1.0) || len <= r {
+        return true;
+    }
+    let cos_a = d.dot(axis) / len;
+    let a = clamp_unit(cos_a).acos();
+    let outer = clamp_unit(cos_outer).acos();
+    let spread = (r / len).asin();
+    a <= outer + spread + CONE_MARGIN
+}
+
+/// The faces a receiver sphere (offset `d` from a spot light, radius `r`) may look up through the
+/// cone of unit `axis` and outer half-angle `acos(cos_outer)`: every face for a point light or a
+/// sphere within `reach` of the light, else [`cone_faces`] of the cone widened by the angle a
+/// lookup's offset of at most `reach` turns a direction seen from at least `|d| − r` away. A
+/// point of the sphere the spot lights lies inside the cone; its lookup direction within that
+/// angle of it, so on one of these faces.
+#[inline]
+pub fn spot_faces(d: Vec3, r: f32, reach: f32, axis: Vec3, cos_outer: f32) -> u32 {
+    let near = d.length() - r;
+    if !(cos_outer >= -1.0) || !(near > reach) {
+        return (1 << FACES) - 1;
+    }
+    let widen = (reach / near).asin();
+    cone_faces(axis, clamp_unit(cos_outer).acos() + widen + CONE_MARGIN)
+}
+
+/// The faces (bit `f` for face `f`) whose pyramid meets the cone of unit `axis` and half-angle
+/// `angle` (radians; all six from π on): face `f`
+/// where the largest cosine between the axis and a direction of its pyramid ([`pyramid_cos`])
+/// is at least `cos(angle)`.
+#[inline]
+pub fn cone_faces(axis: Vec3, angle: f32) -> u32 {
+    if angle >= core::f32::consts::PI {
+        return (1 << FACES) - 1;
+    }
+    let least = angle.cos();
+    let mut mask = 0;
+    let mut f = 0;
+    while f < FACES {
+        let (right, up, forward) = crate::shadow::face_axes(f);
+        if pyramid_cos(Vec3::new(axis.dot(right), axis.dot(up), axis.dot(forward))) >= least {
+            mask |= 1 << f;
+        }
+        f += 1;
+    }
+    mask
+}
+
+/// The largest `a · p` over unit directions `p` of the pyramid `|x| ≤ z, |y| ≤ z` for a unit
+/// `a` (the cosine of the angle from `a` to the pyramid): 1 inside it, else the best of each
+/// side's point nearest `a` (`a` projected on the side's plane, where that lands between the
+/// side's edges: `|a'|`) and the four edges `(±1, ±1, 1)/√3`. A linear function's maximum on the
+/// spherical square is inside it or on a side's arc, there at the projection or an end.
+#[inline]
+pub fn pyramid_cos(a: Vec3) -> f32 {
+    if a.x.abs() <= a.z && a.y.abs() <= a.z {
+        return 1.0;
+    }
+    let inv3 = 1.0 / 3.0f32.sqrt();
+    let mut best = (a.x.abs() + a.y.abs() + a.z) * inv3;
+    // Side x = s·z (s = ±1; the other coordinate free within ±z), then y = s·z.
+    let mut k = 0;
+    while k < 4 {
+        let s = if k & 1 == 0 { 1.0 } else { -1.0 };
+        let (along, other) = if k < 2 { (a.x, a.y) } else { (a.y, a.x) };
+        // Projection onto the plane along = s·z: along and z both become (s·along + z) / 2.
+        let z = 0.5 * (s * along + a.z);
+        if z > 0.0 && other.abs() <= z {
+            let c = (2.0 * z * z + other * other).sqrt();
+            if c > best {
+                best = c;
+            }
+        }
+        k += 1;
+    }
+    best
+}
+
+/// The cone test's margin in radians.
+pub const CONE_MARGIN: f32 = 1e-3;
+
+/// `x` within `[−1, 1]`.
+#[inline]
+fn clamp_unit(x: f32) -> f32 {
+    if x < -1.0 {
+        -1.0
+    } else if x > 1.0 {
+        1.0
+    } else {
+        x
+    }
 }
 
 /// `fetch_max` on a storage-buffer word: `OpAtomicUMax` (device scope, relaxed) on the GPU, a

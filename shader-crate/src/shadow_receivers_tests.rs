@@ -1,6 +1,6 @@
 use super::*;
 use crate::reconstruct::{distance_from_depth, is_background, view_position};
-use crate::shadow::{cube_face, FACES};
+use crate::shadow::{cube_face, FACES, NO_CONE};
 use crate::test_support::{gbuffer, grid, Rng};
 
 fn params(g: ClusterGrid, res: u32, casters: u32) -> ReceiverParams {
@@ -51,7 +51,7 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
             let (px, py) = (rng.below(g.width), rng.below(g.height));
             let d = if rng.below(2) == 0 { 1.0 + rng.unit() } else { 30.0 + 60.0 * rng.unit() };
             let c = view_position(&g, px, py, d) + Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 2.0 - Vec3::ONE;
-            casters.extend_from_slice(&[c.x, c.y, c.z, 0.5 + 6.0 * rng.unit()]);
+            casters.extend_from_slice(&[c.x, c.y, c.z, 0.5 + 6.0 * rng.unit(), 0.0, 0.0, 0.0, NO_CONE]);
         }
         let p = params(g, res, 60);
         let tiles = tiles_of(&p, &gb.depth);
@@ -83,10 +83,10 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
             };
             assert!(within(0) || within(1), "pixel ({x}, {y}) outside its tile's spheres");
             for c in 0..p.casters as usize {
-                let light = Vec3::new(casters[4 * c], casters[4 * c + 1], casters[4 * c + 2]);
+                let light = Vec3::new(casters[8 * c], casters[8 * c + 1], casters[8 * c + 2]);
                 for _ in 0..2 {
                     let normal = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::Y);
-                    if (light - pos).length() > casters[4 * c + 3] {
+                    if (light - pos).length() > casters[8 * c + 3] {
                         continue;
                     }
                     let at = cube_face(pos - light);
@@ -122,10 +122,130 @@ fn casters_far_from_every_receiver_keep_no_face() {
     let p = params(g, 64, 2);
     let tiles = tiles_of(&p, &gb.depth);
     let inside = view_position(&g, 5, 5, distance_from_depth(g.near, gb.depth[5 * 40 + 5]));
-    let casters = [0.0, 0.0, 500.0, 10.0, inside.x, inside.y, inside.z, 0.5];
+    let casters = [0.0, 0.0, 500.0, 10.0, 0.0, 0.0, 0.0, NO_CONE, inside.x, inside.y, inside.z, 0.5, 0.0, 0.0, 0.0, NO_CONE];
     let n = p.tiles_x * p.tiles_y;
     let mask = |c| mask_of((0..n).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters))));
     assert_eq!(mask(0), 0);
     assert_eq!(mask(1), 63);
 }
 
+
+/// The cone test against points: a sphere holding a point inside the cone always meets it; one
+/// whose every point lies 0.05 rad or more outside never does; point lights meet everything.
+#[test]
+fn the_cone_test_keeps_every_sphere_that_reaches_into_the_cone() {
+    let mut rng = Rng(31);
+    let unit = |rng: &mut Rng| Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::X);
+    let (mut met, mut missed) = (0, 0);
+    for _ in 0..20_000 {
+        let axis = unit(&mut rng);
+        let outer = 0.05 + 1.5 * rng.unit();
+        let (d, r) = (unit(&mut rng) * (0.1 + 10.0 * rng.unit()), 3.0 * rng.unit() * rng.unit());
+        let meets = sphere_meets_cone(d, r, axis, outer.cos());
+        assert!(sphere_meets_cone(d, r, axis, NO_CONE));
+        // Points of the sphere: its centre and points towards the axis.
+        let towards = (axis * d.length() - d).normalize_or(Vec3::ZERO);
+        let angle = |q: Vec3| q.normalize().dot(axis).clamp(-1.0, 1.0).acos();
+        for q in [d, d + towards * r * 0.999, d + unit(&mut rng) * r * rng.unit()] {
+            if q.length() > 1e-4 && angle(q) < outer {
+                assert!(meets, "{d} r {r}: a point at {} rad inside a cone of {outer}", angle(q));
+            }
+        }
+        // Exact angular distance from the cone for a sphere not holding the apex.
+        if d.length() > r {
+            let gap = angle(d) - outer - (r / d.length()).asin();
+            if gap > 0.05 {
+                assert!(!meets, "{d} r {r}: {gap} rad outside the cone");
+            }
+        }
+        met += usize::from(meets);
+        missed += usize::from(!meets);
+    }
+    assert!(met > 2_000 && missed > 2_000, "{met} met, {missed} missed");
+}
+
+/// A spot light pointing down over the synthetic G-buffer keeps only faces its cone lights:
+/// every lookup of a receiver inside the cone falls on a face with a level, and the spot keeps
+/// fewer faces than the same light without a cone.
+#[test]
+fn spot_lights_keep_only_the_faces_their_cone_lights() {
+    let mut rng = Rng(17);
+    let g = grid(130, 70, 16);
+    let gb = gbuffer(&g, &mut rng);
+    let p = params(g, 256, 2);
+    let tiles = tiles_of(&p, &gb.depth);
+    let n_tiles = p.tiles_x * p.tiles_y;
+    let centre = view_position(&g, 65, 35, distance_from_depth(g.near, gb.depth[35 * 130 + 65]));
+    // Half-way from the eye to the surface at the frame's centre, pointing at it.
+    let light = centre * 0.5;
+    let axis = (centre - light).normalize();
+    let cos_outer = 0.3f32.cos();
+    let casters = [light.x, light.y, light.z, 40.0, axis.x, axis.y, axis.z, cos_outer, light.x, light.y, light.z, 40.0, 0.0, 0.0, 0.0, NO_CONE];
+    let levels: Vec<u32> = (0..2).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters)))).collect();
+    let (spot, point) = (mask_of(levels[0]), mask_of(levels[1]));
+    assert!(spot.count_ones() < point.count_ones() && spot & !point == 0, "spot {spot:06b}, point {point:06b}");
+    let mut inside = 0;
+    for i in 0..(g.width * g.height) {
+        let z = gb.depth[i as usize];
+        if is_background(z) {
+            continue;
+        }
+        let pos = view_position(&g, i % g.width, i / g.width, distance_from_depth(g.near, z));
+        if (pos - light).normalize().dot(axis) <= cos_outer {
+            continue;
+        }
+        inside += 1;
+        let at = cube_face(pos - light);
+        let level = packed_level(levels[0], at);
+        assert!(level != 0, "pixel {i} inside the cone on face {at} without a level");
+        let normal = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::Y);
+        let f = cube_face(lookup(light, pos, normal, face_side(level, 0, 256)));
+        assert!(spot & (1 << f) != 0, "pixel {i}'s lookup on face {f}, not in {spot:06b}");
+    }
+    assert!(inside > 200, "{inside} pixels inside the cone");
+}
+
+/// `pyramid_cos` against a dense sampling of the pyramid `|x| ≤ z, |y| ≤ z` (its interior on a
+/// grid and its four sides finely): never below the best sampled direction, and within the
+/// sampling's resolution of it.
+#[test]
+fn the_pyramid_cosine_is_the_best_direction_of_the_pyramid() {
+    let mut rng = Rng(5);
+    let n = 200;
+    let samples: Vec<Vec3> = (0..=n).flat_map(|i| (0..=n).map(move |j| Vec3::new(2.0 * i as f32 / n as f32 - 1.0, 2.0 * j as f32 / n as f32 - 1.0, 1.0).normalize())).collect();
+    for _ in 0..2_000 {
+        let a = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::X);
+        let got = pyramid_cos(a);
+        let best = samples.iter().map(|p| a.dot(*p)).fold(-1.0f32, f32::max);
+        assert!(got >= best - 1e-5, "{a}: {got} below a sampled {best}");
+        assert!(got <= best + 2e-4, "{a}: {got} above every sample ({best})");
+    }
+}
+
+/// `cone_faces` holds the face of every direction inside the cone, and leaves out faces the cone
+/// misses: a cone of 40° down the −y axis meets that face alone; tilted 31° below +x, a cone of
+/// 30° meets +x and −y, one of 40° also ±z (the edge `(1, −1, ±1)/√3` lies 37.7° off its axis).
+#[test]
+fn cone_faces_hold_every_direction_of_the_cone() {
+    let mut rng = Rng(9);
+    let unit = |rng: &mut Rng| Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize_or(Vec3::X);
+    let mut partial = 0;
+    for _ in 0..5_000 {
+        let axis = unit(&mut rng);
+        let angle = 0.02 + 1.6 * rng.unit();
+        let mask = cone_faces(axis, angle);
+        partial += usize::from(mask != 63);
+        for _ in 0..50 {
+            let d = unit(&mut rng);
+            if d.dot(axis) > angle.cos() {
+                assert!(mask & (1 << cube_face(d)) != 0, "axis {axis}, {angle} rad: {d} on face {} outside {mask:06b}", cube_face(d));
+            }
+        }
+    }
+    assert!(partial > 3_000, "{partial} cones left faces out");
+    assert_eq!(cone_faces(Vec3::NEG_Y, 40f32.to_radians()), 1 << 3);
+    let tilted = Vec3::new(1.0, -0.6, 0.0).normalize();
+    assert_eq!(cone_faces(tilted, 30f32.to_radians()), (1 << 0) | (1 << 3));
+    assert_eq!(cone_faces(tilted, 40f32.to_radians()), (1 << 0) | (1 << 3) | (1 << 4) | (1 << 5));
+    assert_eq!(cone_faces(Vec3::X, 3.2), 63);
+}

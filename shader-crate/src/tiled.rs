@@ -9,7 +9,8 @@
 //!    [`LIGHTS_PER_INVOCATION`] lights: [`TileCull::keep_batch`]) and appends the survivors, in
 //!    index order, through a workgroup prefix sum to the tile-local list in workgroup memory
 //!    (Olsson & Assarsson 2011, "Tiled Shading", JGT; Harada et al. 2012).
-//! 5. **Shading** — every pixel sums its lights over the list ([`shading::shade_lights`]); with
+//! 5. **Shading** — every pixel sums its lights over the list ([`shading::shade_lights_with`],
+//!    each light times its visibility from the cube shadow maps where lights cast shadows); with
 //!    MSAA (Lauritzen 2010, [`crate::msaa`]) an edge pixel sums them for each of its samples at
 //!    the sample's location and takes the mean colour, in the same rounds (the bounds of steps 1–3
 //!    span every sample).
@@ -36,6 +37,7 @@ use crate::layout::*;
 use crate::light_lists::MAX_LIGHTS_PER_INVOCATION_LLVMPIPE;
 use crate::msaa::{self, MAX_SAMPLES};
 use crate::shading::{self, specular_entries, BACKGROUND_RGBA8};
+use crate::shadow::{CubeShadows, Shadowing};
 use crate::tile_cull::*;
 use glam::Vec3;
 use spirv_std::glam::UVec3;
@@ -72,7 +74,7 @@ pub struct TileOutput {
 /// the workgroup (it synchronises).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
+pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool, V: Shadowing>(
     c: &C,
     s: &mut S,
     p: &TiledParams,
@@ -84,6 +86,7 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
     lights: &[PointLight],
     materials: &[MaterialGpu],
     bounds: &[f32],
+    shadows: &V,
 ) -> TileOutput {
     let fp = &p.frame;
     // 1–3.
@@ -126,13 +129,13 @@ pub fn shade_tile<C: Coop, S: SharedU32 + ?Sized, const SPECULAR: bool>(
                 while sample < samples {
                     if !msaa::is_sky(fp, i, sample, depth) {
                         let surface = msaa::sample_surface(fp, i, sample, depth, normals, albedo, materials);
-                        shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[(first + sample) as usize]);
+                        shading::shade_lights_with::<SPECULAR, true, _, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, shadows, &mut sums[(first + sample) as usize]);
                     }
                     sample += 1;
                 }
             } else if px.geo[slot as usize] != 0 {
                 let surface = shading::fetch_surface(fp, i, depth[i as usize], normals, albedo[i as usize], materials);
-                shading::shade_lights::<SPECULAR, true, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, &mut sums[first as usize]);
+                shading::shade_lights_with::<SPECULAR, true, _, _>(&surface, fp.effects, fp.num_lights, lights, &tile_list, shadows, &mut sums[first as usize]);
             }
             slot += 1;
         }
@@ -190,10 +193,13 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] frame: &mut [u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] tile_lights: &mut [u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] shadow_maps: &[u32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         let c = GpuCoop { subgroup_size, lane, subgroup_id, num_subgroups, local_index };
-        let o = shade_tile::<_, _, SPECULAR>(&c, shared, p, wg.x, wg.y, depth, normals, albedo, lights, materials, bounds);
+        let shadows = CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        let o = shade_tile::<_, _, SPECULAR, _>(&c, shared, p, wg.x, wg.y, depth, normals, albedo, lights, materials, bounds, &shadows);
         let mut slot = 0;
         while slot < MAX_PIXELS_PER_INVOCATION {
             let i = o.pixels[slot as usize];

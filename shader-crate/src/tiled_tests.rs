@@ -22,7 +22,7 @@ fn emulated_tiles_equal_brute_force() {
         let p = TiledParams { frame: frame_params(g, lights.len() as u32), mode, _pad: [0; 3] };
         let emu = Emulation { width, workgroup_size: TILED_WORKGROUP, shared_words: TILED_SHARED_WORDS };
         let out = run_workgroups(emu, g.tiles_x * g.tiles_y, |tile, c, s| {
-            shade_tile::<_, _, true>(c, s, &p, tile % g.tiles_x, tile / g.tiles_x, &gb.depth, &gb.normals, &gb.albedo, &lights, &materials, &bounds)
+            shade_tile::<_, _, true, _>(c, s, &p, tile % g.tiles_x, tile / g.tiles_x, &gb.depth, &gb.normals, &gb.albedo, &lights, &materials, &bounds, &crate::shadow::NoShadows)
         });
         let mut frame = vec![0u32; (w * h) as usize];
         let mut covered = 0;

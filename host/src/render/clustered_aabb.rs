@@ -36,7 +36,7 @@ pub const CLUSTERED_AABB: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
-    shadows: false,
+    shadows: true,
 };
 
 pub struct ClusteredAabb {
@@ -157,10 +157,11 @@ impl LightingTechnique for ClusteredAabb {
                 self.slots,
             )
         })?;
+        let [slots, maps] = f.shadow_buffers();
         rec.pass("shading", |rec| {
             rec.dispatch_blocks(
                 super::shading_pipeline(&k.shade_aabb, &p)?,
-                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters, f.lights, f.materials, f.frame, f.bounds],
+                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, &self.pixel_clusters, &self.offsets, &self.counts, &self.list, &self.counters, f.lights, f.materials, f.frame, f.bounds, slots, maps],
                 &p,
                 p.grid.width,
                 p.grid.height,

@@ -81,6 +81,14 @@ pub fn light_effects(spots: &[Option<Spot>], directional: &[Directional]) -> Res
     Ok(shaders::light_types::light_effects(spots.iter().any(Option::is_some), directional.len() as u32))
 }
 
+/// Each light's cone in view space for the shadow maps' caster records: the unit axis and the
+/// cosine of the outer half-angle of a spot light, `None` for a point light (and for every light
+/// of a scene without spot lights).
+pub fn view_cones(view: &ViewTransform, spots: &[Option<Spot>], lights: usize) -> Vec<Option<(Vec3, f32)>> {
+    let rotate = |v: Vec3| (view.rotation * v.as_dvec3()).normalize().as_vec3();
+    (0..lights).map(|i| spots.get(i).copied().flatten().map(|s| (rotate(s.direction), s.outer.cos()))).collect()
+}
+
 /// The GPU light buffer: `lights_view` (the punctual lights in view space), then with spots one
 /// cone record per light (a point light's marker for the others), then the directional lights;
 /// checks every spot and directional light (errors name the light and field).

@@ -35,7 +35,7 @@ pub const RASTER_TILED: Description = Description {
     own_kernels: handles::COMPUTE,
     own_raster: handles::RASTER,
     msaa: true,
-    shadows: false,
+    shadows: true,
 };
 
 /// Entries of each tile's first list.
@@ -115,10 +115,11 @@ impl LightingTechnique for RasterTiled {
             rec.kernels_read_fragment_writes();
             Ok(())
         })?;
+        let [slots, maps] = f.shadow_buffers();
         rec.pass("shading", |rec| {
             rec.dispatch_linear(
                 super::shading_pipeline(&self.shade_pipes, &p)?,
-                &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.counts, &self.lists],
+                &[&t.depth_buf, &t.normal_buf, &t.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.counts, &self.lists, slots, maps],
                 &p,
                 p.count,
             )

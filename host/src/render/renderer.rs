@@ -238,7 +238,8 @@ impl Renderer {
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
         let frame = Buffer::storage(ctx, "frame", 4 * n as u64).context("allocating the frame")?;
-        let shadows = ShadowMaps::new(gpu, &positions, &indices, &geometry.draws, scene.view.rotation(), scene.shadows, &lights_view, s.shadow, (s.width, s.height))?;
+        let cones = light_types::view_cones(&scene.view, scene.spots, lights_view.len());
+        let shadows = ShadowMaps::new(gpu, &positions, &indices, &geometry.draws, scene.view.rotation(), scene.shadows, &lights_view, &cones, s.shadow, (s.width, s.height))?;
         let shadow_effect = if shadows.is_some() { light_types_bits::EFFECT_SHADOWS } else { 0 };
         let params = FrameParams {
             grid,
@@ -392,7 +393,7 @@ impl Renderer {
                 let n = self.res.lights_view.len();
                 bail!("{} lights in place of {}: the scene's lights cast shadows, and their flags are per light", lights_view.len(), n);
             }
-            sh.lights_moved(&gpu.ctx, &lights_view)?;
+            sh.lights_moved(&gpu.ctx, &lights_view, &light_types::view_cones(&self.res.view, spots, lights_view.len()))?;
         }
         if lights_view.len() == self.res.lights_view.len() && effects == self.res.params.effects {
             self.res.lights.write(&records).context("uploading lights")?;

@@ -36,7 +36,7 @@ use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
 use shaders::shadow_raster::ShadowRasterParams;
-use shaders::shadow::{caster_record, ShadowParams, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow::{caster_record, ShadowParams, CASTER_WORDS, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
 use shaders::shadow_atlas::{cap_level, handles as atlas_handles, AtlasParams, ARGS_SHIFT, ARGS_USED, MIN_SIDE};
 use shaders::layout::ClusterGrid;
 use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
@@ -170,7 +170,7 @@ pub struct ShadowMaps {
     pub slots: Buffer,
     /// Each caster's view-space position and radius (cull and raster).
     records: Buffer,
-    records_cpu: Vec<[f32; 4]>,
+    records_cpu: Vec<[f32; CASTER_WORDS as usize]>,
     /// The batches (`shaders::shadow_cull::BATCH_WORDS` each) and their spheres on the host, in
     /// the position buffer's space (relative to the eye).
     batches: Buffer,
@@ -211,7 +211,7 @@ impl ShadowMaps {
     /// opaque `draws` of `indices` over `positions` (the position buffer's contents; `rotation`
     /// takes them to view space); `None` where no light casts shadows (nothing is made).
     #[allow(clippy::too_many_arguments)]
-    pub fn new(gpu: &Gpu, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4, casters: &[bool], lights_view: &[PointLight], settings: ShadowSettings, frame: (u32, u32)) -> Result<Option<Self>> {
+    pub fn new(gpu: &Gpu, positions: &[[f32; 3]], indices: &[u32], draws: &[Draw], rotation: Mat4, casters: &[bool], lights_view: &[PointLight], cones: &[Option<(Vec3, f32)>], settings: ShadowSettings, frame: (u32, u32)) -> Result<Option<Self>> {
         let ctx = &gpu.ctx;
         check_resolution(settings.resolution)?;
         let list: Vec<u32> = casters.iter().enumerate().filter(|(_, &c)| c).map(|(i, _)| i as u32).collect();
@@ -233,7 +233,7 @@ impl ShadowMaps {
         slots.extend(std::iter::repeat_n(0, FACE_WORDS as usize * faces));
         let order = shadow_triangles(positions, indices, draws);
         let (batch_words, spheres) = batches(positions, &order);
-        let records_cpu = records(&list, lights_view);
+        let records_cpu = records(&list, lights_view, cones);
         let capacity = entry_capacity(ctx, &spheres, rotation, &records_cpu)?;
         let writer = match settings.raster {
             ShadowRaster::Compute => Writer::Compute(ComputePipeline::new(ctx, &gpu.compute_module, shaders::shadow_raster::handles::SHADOW_RASTER)?),
@@ -290,11 +290,11 @@ impl ShadowMaps {
 
     /// Uploads the casters' records anew (the lights or the camera moved) and grows the entries
     /// to the new count where it passed them.
-    pub fn lights_moved(&mut self, ctx: &Context, lights_view: &[PointLight]) -> Result<()> {
+    pub fn lights_moved(&mut self, ctx: &Context, lights_view: &[PointLight], cones: &[Option<(Vec3, f32)>]) -> Result<()> {
         if let Some(&l) = self.casters.iter().find(|&&l| l as usize >= lights_view.len()) {
             bail!("shadow-casting light {l} is past the {} lights of the frame", lights_view.len());
         }
-        self.records_cpu = records(&self.casters, lights_view);
+        self.records_cpu = records(&self.casters, lights_view, cones);
         self.records.write(&self.records_cpu).context("uploading the shadow casters")?;
         self.recount(ctx)
     }
@@ -421,7 +421,7 @@ fn atlas_texels(ctx: &Context, settings: &ShadowSettings, casters: usize) -> Res
         None => most.min(binding),
     };
     if texels < least {
-        bail!("{casters} shadow-casting lights need a shadow atlas of at least {} KiB ({}² texels for each of their {faces} faces); it has {} KiB", 4 * least >> 10, MIN_SIDE.min(settings.resolution), 4 * texels >> 10);
+        bail!("{casters} shadow-casting lights need a shadow atlas of at least {} KiB ({}² texels for each of their {faces} faces); it has {} KiB", (4 * least) >> 10, MIN_SIDE.min(settings.resolution), (4 * texels) >> 10);
     }
     Ok(texels as u32)
 }
@@ -461,9 +461,9 @@ fn batches(positions: &[[f32; 3]], order: &[u32]) -> (Vec<u32>, Vec<[f32; 4]>) {
 /// The entries the cull can write for these casters: [`face_mask`] on each batch's sphere
 /// widened by `CULL_MARGIN` of its distance and both radii, so that the GPU's unwidened test in
 /// its own rounding never finds more.
-pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; 4]]) -> u64 {
+pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; CASTER_WORDS as usize]]) -> u64 {
     let view: Vec<(Vec3, f32)> = spheres.iter().map(|s| (rotation.transform_point3(Vec3::new(s[0], s[1], s[2])), s[3])).collect();
-    let count_for = |records: &[[f32; 4]]| -> u64 {
+    let count_for = |records: &[[f32; CASTER_WORDS as usize]]| -> u64 {
         let mut n = 0u64;
         for rec in records {
             let (light, radius) = (Vec3::new(rec[0], rec[1], rec[2]), rec[3]);
@@ -482,7 +482,7 @@ pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; 4]])
 
 /// [`count_entries`] as a buffer capacity: at least one entry, and refused in one line where the
 /// entries pass a storage binding or the draw's vertex count.
-fn entry_capacity(ctx: &Context, spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; 4]]) -> Result<u32> {
+fn entry_capacity(ctx: &Context, spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; CASTER_WORDS as usize]]) -> Result<u32> {
     let n = count_entries(spheres, rotation, records).max(1);
     let most = (u32::MAX / (3 * BATCH_TRIANGLES)) as u64;
     if n > most {
@@ -496,7 +496,8 @@ fn entry_buffer(ctx: &Context, capacity: u32) -> Result<Buffer> {
     Buffer::storage(ctx, "shadow draw entries", 4 * ENTRY_WORDS as u64 * capacity as u64).context("allocating the shadow draw entries")
 }
 
-/// The raster pass's records of `casters` (`shaders::shadow::caster_record`).
-fn records(casters: &[u32], lights_view: &[PointLight]) -> Vec<[f32; 4]> {
-    casters.iter().map(|&l| caster_record(&lights_view[l as usize])).collect()
+/// The records of `casters` (`shaders::shadow::caster_record`), each with its light's view-space
+/// cone where it is a spot light (`cones`: one per light, or none for a scene of point lights).
+fn records(casters: &[u32], lights_view: &[PointLight], cones: &[Option<(Vec3, f32)>]) -> Vec<[f32; CASTER_WORDS as usize]> {
+    casters.iter().map(|&l| caster_record(&lights_view[l as usize], cones.get(l as usize).copied().flatten())).collect()
 }

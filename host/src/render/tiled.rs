@@ -27,7 +27,7 @@ pub const TILED: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
-    shadows: false,
+    shadows: true,
 };
 
 pub const TILED_25D: Description = Description {
@@ -81,10 +81,11 @@ impl LightingTechnique for Tiled {
     fn record(&self, gpu: &Gpu, rec: &mut Recorder<'_>, f: &FrameInputs<'_>) -> VkResult<()> {
         let grid = &self.params.frame.grid;
         let g = f.targets;
+        let [slots, maps] = f.shadow_buffers();
         rec.pass("culling + shading", |rec| {
             rec.dispatch(
                 super::shading_pipeline(&gpu.kernels.shade_tiled, &self.params.frame)?,
-                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.tile_lights],
+                &[&g.depth_buf, &g.normal_buf, &g.albedo_buf, f.lights, f.materials, f.frame, f.bounds, &self.tile_lights, slots, maps],
                 &self.params,
                 [grid.tiles_x, grid.tiles_y, 1],
             )

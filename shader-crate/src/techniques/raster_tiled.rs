@@ -260,6 +260,8 @@ specular_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 6)] bounds: &[f32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] counts: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] lists: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] shadow_maps: &[u32],
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         let i = linear_index(wg, nwg, local);
@@ -273,7 +275,8 @@ specular_entries! {
         let t = tile_of_pixel(&p.grid, i);
         let n = counts[t as usize];
         let list = shading::list_range(lists, t * p.light_capacity, if n < p.light_capacity { n } else { p.light_capacity });
-        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &list, &crate::shadow::NoShadows);
+        let shadows = crate::shadow::CubeShadows { slots: shadow_slots, maps: shadow_maps };
+        frame[i as usize] = shading::shade_gbuffer_pixel::<SPECULAR, _, _>(p, bounds, i, depth, normals, albedo, materials, lights, &list, &shadows);
     }
 }
 
@@ -365,12 +368,13 @@ pub mod handles {
     /// Step 2: lights, quads.
     pub const LIGHT_RECTS: Kernel<FrameParams> = Kernel::new("raster_tiled::light_rects", 2, [256, 1, 1], false);
     /// Step 4 `[diffuse only, with specular]`: the G-buffer (3), lights, materials, frame,
-    /// bounds, counts, lists.
+    /// bounds, counts, lists, the shadow slots and maps.
     pub const SHADE: [Kernel<FrameParams>; 2] = [
-        Kernel::new("raster_tiled::shade_raster_tiled_diffuse", 9, [256, 1, 1], false),
-        Kernel::new("raster_tiled::shade_raster_tiled_specular", 9, [256, 1, 1], false),
+        Kernel::new("raster_tiled::shade_raster_tiled_diffuse", 11, [256, 1, 1], false),
+        Kernel::new("raster_tiled::shade_raster_tiled_specular", 11, [256, 1, 1], false),
     ];
-    /// Step 5 (MSAA) `[diffuse only, with specular]`: as [`SHADE`], and the edge list.
+    /// Step 5 (MSAA) `[diffuse only, with specular]`: as [`SHADE`] without the shadows (frames
+    /// with shadows are shaded once per pixel), and the edge list.
     pub const SHADE_EDGES: [Kernel<FrameParams>; 2] = [
         Kernel::new("raster_tiled::shade_edges_raster_tiled_diffuse", 10, [256, 1, 1], false),
         Kernel::new("raster_tiled::shade_edges_raster_tiled_specular", 10, [256, 1, 1], false),
