@@ -4,9 +4,11 @@
 //! compute module whose shading loops carried a list cursor holding a buffer slice (204 such phis)
 //! crashed NVIDIA's pipeline compiler while lavapipe ran it. The loop now carries only integers
 //! (`shaders::shading::LightList`); this test keeps it so for every kernel.
+mod common;
+
+use common::spirv::{instructions, words, MAGIC};
 use std::collections::HashSet;
 
-const MAGIC: u32 = 0x0723_0203;
 const OP_CAPABILITY: u32 = 17;
 const OP_TYPE_VECTOR: u32 = 23;
 const OP_TYPE_ARRAY: u32 = 28;
@@ -17,20 +19,6 @@ const OP_SELECT: u32 = 169;
 const OP_PHI: u32 = 245;
 const CAPABILITY_VARIABLE_POINTERS_STORAGE_BUFFER: u32 = 4441;
 const CAPABILITY_VARIABLE_POINTERS: u32 = 4442;
-
-/// The instructions of a module as `(opcode, operands)` (SPIR-V specification §2.3).
-fn instructions(words: &[u32]) -> Vec<(u32, &[u32])> {
-    assert!(words.len() >= 5 && words[0] == MAGIC, "not a SPIR-V module");
-    let mut out = Vec::new();
-    let mut at = 5;
-    while at < words.len() {
-        let count = (words[at] >> 16) as usize;
-        assert!(count > 0 && at + count <= words.len(), "truncated instruction at word {at}");
-        out.push((words[at] & 0xffff, &words[at + 1..at + count]));
-        at += count;
-    }
-    out
-}
 
 /// Result ids of the `OpPhi` / `OpSelect` instructions whose type is a pointer or holds one,
 /// unless the module declares a variable-pointers capability.
@@ -55,9 +43,6 @@ fn variable_pointers(words: &[u32]) -> Vec<u32> {
     inst.iter().filter(|(op, o)| matches!(*op, OP_PHI | OP_SELECT) && holds_pointer.contains(&o[0])).map(|(_, o)| o[1]).collect()
 }
 
-fn words(module: &[u8]) -> Vec<u32> {
-    module.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
-}
 
 #[test]
 fn no_module_carries_a_pointer_through_a_phi() {

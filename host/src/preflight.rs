@@ -118,21 +118,27 @@ pub fn is_llvmpipe(info: &DeviceInfo) -> bool {
 
 /// The most lights `technique` takes on this device in `record`s, and the limit that sets it.
 pub fn max_lights(info: &DeviceInfo, technique: Technique, record: LightRecord, tile_size: u32) -> (u64, String) {
-    let range = info.max_storage_buffer_range as u64;
+    // The light buffer's length is never read, so it takes the whole reported range; the
+    // technique's own buffers per light stay below 2^31 bytes (`vk::device::MAX_BINDING_BYTES`).
+    let range = info.reported_storage_buffer_range as u64;
     let more = match record {
         LightRecord::Full => "; --light-record compact holds twice as many",
         LightRecord::Compact => "",
     };
+    let d = technique.description();
     let mut limits = vec![
-        (MAX_LIGHTS as u64, "the renderer's limit (2^27 − 4 lights: 2 GiB of 16-byte records)".to_string()),
+        (MAX_LIGHTS as u64, "the renderer's limit (2^28 − 4 lights: 16-byte records in one binding of 4 GiB, the most maxStorageBufferRange can state)".to_string()),
         (record.max_lights_in(range), format!(
-            "{}-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange {}, kept below 2 GiB){more}",
+            "{}-byte lights in one buffer; {} addresses {} per buffer (maxStorageBufferRange){more}",
             record.bytes_per_light(),
             info.name,
             mib(range),
-            mib(info.reported_storage_buffer_range as u64)
         )),
     ];
+    if d.light_words > 0 {
+        let own = info.max_storage_buffer_range as u64;
+        limits.push((own / (4 * d.light_words as u64), format!("{} keeps {} bytes per light in buffers of at most {} (below 2 GiB)", d.name, 4 * d.light_words, mib(own))));
+    }
     if is_llvmpipe(info) {
         let n = (technique.description().llvmpipe_lights)(tile_size.max(1));
         limits.push((n as u64, "lavapipe's loop limiter ends an invocation's loops after 65 535 iterations".to_string()));
@@ -213,25 +219,32 @@ mod tests {
 
     #[test]
     fn light_limits_follow_the_device_and_the_technique() {
-        // A GPU reporting 4 GiB or exactly 2 GiB per binding: no loop limit, and the binding bound
-        // (below 2^31 bytes: 2^26 lights of 32 B rendered a black frame on an H200) takes one
-        // light off the renderer's 2^26, refused in one line before anything is allocated.
-        for reported in [u32::MAX, 1 << 31] {
-            let gpu = device("NVIDIA", reported, 32768, 80 << 30);
-            let (n, why) = max_lights(&gpu, Technique::Tiled, LightRecord::Full, 32);
-            assert_eq!(n, (1 << 26) - 1, "{why}");
-            check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, n, "--lights 67108863").unwrap();
-            let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, 1 << 26, "--lights 67108864"));
-            assert!(e.starts_with("--lights 67108864: 67108864 lights, but clustered-bvh takes at most 67108863 here (32-byte lights in one buffer") && !e.contains('\n'), "{e}");
-            assert!(e.contains("--light-record compact holds twice as many"), "{e}");
-            // Compact records: 2^27 − 4 lights (a header record, two lights per 32 bytes, below 2^31 bytes).
-            let (n, why) = max_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32);
-            assert_eq!(n, MAX_LIGHTS as u64, "{why}");
-            assert_eq!(n, (1 << 27) - 4);
-            check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, 100_000_000, "--lights 100000000").unwrap();
-            let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, n + 1, "--lights 134217725"));
-            assert!(e.starts_with("--lights 134217725: 134217725 lights, but clustered-bvh takes at most 134217724 here"), "{e}");
-        }
+        // A GPU reporting 4 GiB − 1 per binding: the light buffer (whose length no kernel reads)
+        // takes all of it, 2^27 − 1 lights of 32 B; one more is refused in one line before
+        // anything is allocated.
+        let gpu = device("NVIDIA", u32::MAX, 32768, 80 << 30);
+        let (n, why) = max_lights(&gpu, Technique::Tiled, LightRecord::Full, 32);
+        assert_eq!(n, (1 << 27) - 1, "{why}");
+        check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, n, "--lights 134217727").unwrap();
+        let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Full, 32, 1 << 27, "--lights 134217728"));
+        assert!(e.starts_with("--lights 134217728: 134217728 lights, but clustered-bvh takes at most 134217727 here (32-byte lights in one buffer") && !e.contains('\n'), "{e}");
+        assert!(e.contains("--light-record compact holds twice as many"), "{e}");
+        // Compact records: 2^28 − 4 lights (a header record, two lights per 32 bytes, within
+        // 4 GiB − 1), the renderer's limit too.
+        let (n, why) = max_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32);
+        assert_eq!((n, n), (MAX_LIGHTS as u64, (1 << 28) - 4), "{why}");
+        check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, 250_000_000, "--lights 250000000").unwrap();
+        let e = err(check_lights(&gpu, Technique::ClusteredBvh, LightRecord::Compact, 32, n + 1, "--lights 268435453"));
+        assert!(e.starts_with("--lights 268435453: 268435453 lights, but clustered-bvh takes at most 268435452 here (the renderer's limit"), "{e}");
+        // A technique's own buffers per light stay below 2^31 bytes: raster-tiled's 16-byte quads.
+        let (n, why) = max_lights(&gpu, Technique::RasterTiled, LightRecord::Compact, 32);
+        assert_eq!(n, ((1u64 << 31) - 1) / 16, "{why}");
+        assert!(why.contains("raster-tiled keeps 16 bytes per light in buffers of at most 2048.0 MiB"), "{why}");
+        // A device reporting exactly 2^31 bytes: the light buffer may take all of them (2^26
+        // lights of 32 B, which read as none through the binding's length on an H200).
+        let two = device("NVIDIA", 1 << 31, 32768, 80 << 30);
+        assert_eq!(max_lights(&two, Technique::Tiled, LightRecord::Full, 32).0, 1 << 26);
+        assert_eq!(max_lights(&two, Technique::ClusteredBvh, LightRecord::Compact, 32).0, (1 << 27) - 2);
         let lavapipe = device("llvmpipe", 128 << 20, 16384, 1 << 30);
         assert_eq!(max_lights(&lavapipe, Technique::ClusteredBvh, LightRecord::Full, 32).0, 400_000);
         assert_eq!(max_lights(&lavapipe, Technique::Tiled, LightRecord::Full, 32).0, 100_000);

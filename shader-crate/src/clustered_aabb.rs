@@ -101,7 +101,7 @@ pub fn staged_pass<C: Coop, S: SharedU32 + ?Sized, L: ListSink + ?Sized>(
     let mut batch = 0;
     while batch < num_lights {
         if batch + li < num_lights {
-            stage_light(s, li, &crate::compact_light::light_at(lights, effects, batch + li));
+            stage_light(s, li, &crate::compact_light::light_at(lights, effects, num_lights, batch + li));
         }
         c.workgroup_barrier();
         let m = if num_lights - batch < LIGHT_BATCH { num_lights - batch } else { LIGHT_BATCH };

@@ -27,7 +27,7 @@ pub fn light_keys(
 ) {
     let i = linear_index(wg, nwg, local);
     if i < p.count {
-        keys[i as usize] = p.q30.morton30_of(light_at(lights, light_types, i).position);
+        keys[i as usize] = p.q30.morton30_of(light_at(lights, light_types, p.count, i).position);
         order[i as usize] = i;
     }
 }
@@ -48,7 +48,8 @@ pub fn bvh_spheres(
 ) {
     let s = linear_index(wg, nwg, local);
     if s < p.count {
-        spheres[s as usize] = light_bvh::sphere_of(&light_at(lights, light_types, order[s as usize]));
+        // In bounds: `s < count`, the sorted lights `order` and `spheres` hold.
+        crate::unchecked::set(spheres, s, light_bvh::sphere_of(&light_at(lights, light_types, p.count, crate::unchecked::at(order, s))));
     }
 }
 

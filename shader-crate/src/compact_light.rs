@@ -1,5 +1,7 @@
 //! Compact light records: a point light in 16 bytes instead of 32, so that one storage binding
-//! (kept below 2^31 bytes, `host/src/vk/device.rs`) holds 2^27 − 4 lights instead of 2^26 − 1.
+//! holds twice as many: 2^28 − 4 lights instead of 2^27 − 1 in the 4 GiB − 1 an NVIDIA GPU
+//! binds (the light buffer takes the whole reported range: its length is never read,
+//! [`light_at`]), 2^27 − 4 in a binding below 2^31 bytes.
 //!
 //! # Layout
 //!
@@ -54,14 +56,18 @@ const MANTISSA_MAX: u32 = (1 << MANTISSA_BITS) - 1;
 /// Low f32 bits the radius drops.
 pub const RADIUS_DROPPED_BITS: u32 = 7;
 const RADIUS_MASK: u32 = (1 << 24) - 1;
-/// Compact lights one binding of fewer than 2^31 bytes holds: `32 · (1 + ⌈n/2⌉) ≤ 2^31 − 1`.
-pub const MAX_COMPACT_LIGHTS: u32 = (1 << 27) - 4;
-const _: () = assert!(32 * (1 + (MAX_COMPACT_LIGHTS as u64).div_ceil(2)) < 1 << 31);
+/// Compact lights one binding holds at most: `32 · (1 + ⌈n/2⌉) ≤ 2^32 − 1`, the largest
+/// `maxStorageBufferRange` (a 32-bit limit) — on a device that reports it, for the light buffer
+/// (its length is never read: [`light_at`]).
+pub const MAX_COMPACT_LIGHTS: u32 = (1 << 28) - 4;
+const _: () = assert!(32 * records_for(MAX_COMPACT_LIGHTS) as u64 <= u32::MAX as u64);
+const _: () = assert!(32 * records_for(MAX_COMPACT_LIGHTS + 2) as u64 > u32::MAX as u64);
 
-/// Records (32 B each) a buffer of `n` compact lights takes: the header and `⌈n/2⌉`.
+/// Records (32 B each) a buffer of `n` compact lights takes: the header and `⌈n/2⌉` (one for
+/// no lights, so that a clamped read stays inside: [`compact_at`]).
 #[inline]
 pub const fn records_for(n: u32) -> u32 {
-    1 + n.div_ceil(2)
+    1 + if n == 0 { 1 } else { n.div_ceil(2) }
 }
 
 /// The quantisation frame of a buffer's positions: origin and step per axis.
@@ -159,14 +165,16 @@ pub fn decode(frame: &Frame, w: [u32; 4]) -> PointLight {
     }
 }
 
-/// Light `l` of a compact buffer (`lights.len() ≥ 1`; an `l` past the buffer reads its last
-/// record, as the full-record loops read their last light: `shading::shade_range`).
+/// Light `l` of a compact buffer of `n` lights (an `l` from `n` on reads light `n − 1`, as the
+/// full-record loops read their last light: `shading::shade_range`). The buffer's length is
+/// never read (module docs: bindings past 2^31 bytes).
 #[inline]
-pub fn compact_at(lights: &[PointLight], l: u32) -> PointLight {
-    let last = (lights.len() as u32).max(1) - 1;
-    // In bounds: 0 ≤ last < len (a compact buffer always has its header).
+pub fn compact_at(lights: &[PointLight], n: u32, l: u32) -> PointLight {
+    let l = if l < n { l } else { n.max(1) - 1 };
+    // In bounds: a compact buffer of `n` lights holds its header and `records_for(n) − 1 ≥
+    // 1 + l/2` records after it (`records_for` counts one for no lights).
     let header = crate::unchecked::get(lights, 0);
-    let r = crate::unchecked::get(lights, (1 + (l >> 1)).min(last));
+    let r = crate::unchecked::get(lights, 1 + (l >> 1));
     let w = if l & 1 == 0 {
         [r.position[0].to_bits(), r.position[1].to_bits(), r.position[2].to_bits(), r.radius.to_bits()]
     } else {
@@ -175,15 +183,20 @@ pub fn compact_at(lights: &[PointLight], l: u32) -> PointLight {
     decode(&Frame::of_header(header), w)
 }
 
-/// Light `l` as the kernels see it: its record, or with [`EFFECT_COMPACT_LIGHTS`] its decoded
-/// compact record. `l` past the buffer reads the last record (callers keep `l` in range).
+/// Light `l` of the frame's `n` punctual lights as the kernels see it: its record, or with
+/// [`EFFECT_COMPACT_LIGHTS`] its decoded compact record. `l` from `n` on reads light `n − 1`
+/// (callers keep `l` below `n`; the clamp keeps a stray index inside the buffer, which holds at
+/// least one record). No kernel reads the light buffer's length: a binding of 2^31 bytes or more
+/// reads as empty through it on NVIDIA's driver (`docs/results/h200/light-buffer-boundary/`),
+/// and the light buffer may pass 2 GiB (`vk::device::DeviceInfo::length_free_storage_range`;
+/// `tests/spirv_lengths.rs` keeps every kernel so).
 #[inline]
-pub fn light_at(lights: &[PointLight], effects: u32, l: u32) -> PointLight {
+pub fn light_at(lights: &[PointLight], effects: u32, n: u32, l: u32) -> PointLight {
     if effects & EFFECT_COMPACT_LIGHTS != 0 {
-        compact_at(lights, l)
+        compact_at(lights, n, l)
     } else {
-        let last = (lights.len() as u32).max(1) - 1;
-        *crate::unchecked::get(lights, l.min(last))
+        // In bounds: the buffer holds the `n` lights (one record for none).
+        *crate::unchecked::get(lights, if l < n { l } else { n.max(1) - 1 })
     }
 }
 
@@ -193,6 +206,9 @@ pub fn pack(frame: &Frame, lights: &[PointLight]) -> Vec<PointLight> {
     let word = |w: u32| f32::from_bits(w);
     let mut out = Vec::with_capacity(records_for(lights.len() as u32) as usize);
     out.push(frame.header());
+    if lights.is_empty() {
+        out.push(frame.header());
+    }
     for pair in lights.chunks(2) {
         let a = encode(frame, &pair[0]);
         let b = pair.get(1).map(|l| encode(frame, l)).unwrap_or([0; 4]);
@@ -227,7 +243,7 @@ pub fn frame_of(lights: &[PointLight]) -> Frame {
 /// host keeps for its CPU references and statistics).
 #[cfg(not(target_arch = "spirv"))]
 pub fn decoded(packed: &[PointLight], n: u32) -> Vec<PointLight> {
-    (0..n).map(|l| compact_at(packed, l)).collect()
+    (0..n).map(|l| compact_at(packed, n, l)).collect()
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ fn decoded_lights_are_within_the_stated_error() {
         let packed = pack(&frame, &lights);
         assert_eq!(packed.len() as u32, records_for(n as u32));
         for (l, a) in lights.iter().enumerate() {
-            let b = compact_at(&packed, l as u32);
+            let b = compact_at(&packed, n as u32, l as u32);
             for k in 0..3 {
                 let tol = frame.step[k] * 0.5 + 4.0 * f32::EPSILON * (frame.origin[k].abs() + 60.0);
                 assert!((a.position[k] - b.position[k]).abs() <= tol, "light {l} axis {k}: {} vs {}", a.position[k], b.position[k]);
@@ -74,7 +74,7 @@ fn records_follow_the_drawn_layout() {
     // The third light's partner half is empty (black, radius 0).
     assert_eq!(w(&packed[2], true), [0; 4]);
     for (l, want) in [(0, a), (1, b), (2, a)] {
-        assert_eq!(compact_at(&packed, l), PointLight { colour: want.colour, intensity: 1.0, ..want });
+        assert_eq!(compact_at(&packed, 3, l), PointLight { colour: want.colour, intensity: 1.0, ..want });
     }
 }
 
@@ -87,38 +87,48 @@ fn edge_cases_decode_as_documented() {
     let frame = frame_of(&flat);
     assert_eq!(frame.step.y, 0.0);
     let packed = pack(&frame, &flat);
-    let (a, b) = (compact_at(&packed, 0), compact_at(&packed, 1));
+    let (a, b) = (compact_at(&packed, 2, 0), compact_at(&packed, 2, 1));
     assert_eq!((a.position, a.radius, a.colour), ([1.0, 2.0, -3.0], 0.0, [0.0; 3]));
     assert_eq!(b.position, [4.0, 2.0, -3.0]);
     assert!((b.colour[0] - 2.0).abs() < 1e-3 && b.colour[1] == 0.0, "{:?}", b.colour);
     let wide = light([0.0; 3], 1.0, [1e6, 1.0, 1e-6], 1.0);
-    let d = compact_at(&pack(&frame_of(&[wide]), &[wide]), 0);
+    let d = compact_at(&pack(&frame_of(&[wide]), &[wide]), 1, 0);
     assert!((d.colour[0] - 1e6).abs() <= 1e6 * 2f32.powi(-11));
     assert!(d.colour[1] <= 1e6 * 2f32.powi(-11) && d.colour[2] <= 1e6 * 2f32.powi(-11));
     // Largest emission the host accepts (2^83 per channel) still encodes.
     let bright = light([0.0; 3], 1.0, [1.0; 3], 2f32.powi(83));
-    assert_eq!(compact_at(&pack(&frame_of(&[bright]), &[bright]), 0).colour, [2f32.powi(83); 3]);
+    assert_eq!(compact_at(&pack(&frame_of(&[bright]), &[bright]), 1, 0).colour, [2f32.powi(83); 3]);
 }
 
 /// The accessor reads records as they are without the compact bit, decodes with it, and an index
-/// past the buffer reads the last record (never past it).
+/// from the light count on reads the last light (never past the buffer, for any count: the CPU
+/// build checks every index), also for no lights.
 #[test]
 fn light_at_follows_the_effect_bit() {
-    let lights = random_lights(5, 9);
-    for l in 0..5 {
-        assert_eq!(light_at(&lights, 0, l), lights[l as usize]);
+    for n in [1u32, 2, 5, 6] {
+        let lights = random_lights(n as usize, 9);
+        for l in 0..n {
+            assert_eq!(light_at(&lights, 0, n, l), lights[l as usize]);
+        }
+        assert_eq!(light_at(&lights, 0, n, 99), lights[n as usize - 1]);
+        let packed = pack(&frame_of(&lights), &lights);
+        assert_eq!(packed.len() as u32, records_for(n));
+        for l in 0..n {
+            assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, n, l), compact_at(&packed, n, l));
+        }
+        assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, n, 99), compact_at(&packed, n, n - 1));
+        assert_eq!(decoded(&packed, n), (0..n).map(|l| compact_at(&packed, n, l)).collect::<Vec<_>>());
     }
-    assert_eq!(light_at(&lights, 0, 99), lights[4]);
-    let packed = pack(&frame_of(&lights), &lights);
-    for l in 0..5 {
-        assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, l), compact_at(&packed, l));
-    }
-    assert_eq!(light_at(&packed, EFFECT_COMPACT_LIGHTS, 99), compact_at(&packed, 4 | 1));
-    assert_eq!(decoded(&packed, 5), (0..5).map(|l| compact_at(&packed, l)).collect::<Vec<_>>());
+    let none = pack(&frame_of(&[]), &[]);
+    assert_eq!(none.len() as u32, records_for(0));
+    let _ = (light_at(&none, EFFECT_COMPACT_LIGHTS, 0, 0), light_at(&none, EFFECT_COMPACT_LIGHTS, 0, 7));
 }
 
+/// The largest compact buffer fits the largest binding Vulkan can state (4 GiB − 1); two lights
+/// more (one record) would not.
 #[test]
-fn the_largest_compact_buffer_stays_below_two_gib() {
-    assert!(32 * records_for(MAX_COMPACT_LIGHTS) as u64 <= i32::MAX as u64);
-    assert!(32 * records_for(MAX_COMPACT_LIGHTS + 2) as u64 > i32::MAX as u64);
+fn the_largest_compact_buffer_fits_one_binding() {
+    assert!(32 * records_for(MAX_COMPACT_LIGHTS) as u64 <= u32::MAX as u64);
+    assert!(32 * records_for(MAX_COMPACT_LIGHTS + 2) as u64 > u32::MAX as u64);
+    assert_eq!(records_for(0), 2, "a record for no lights keeps clamped reads inside");
 }

@@ -90,20 +90,22 @@ pub fn sample_surface_position(g: &ClusterGrid, px: u32, py: u32, s: u32, z_buf:
 /// them — or the centre's colour where it owns none (it writes nothing then) or every sample of
 /// a pixel that is no edge (`alone_is_edge()`: the edge rule over its own samples; the resolve
 /// then reads the centre). `centre` is `centre()` (sRGB8, sample 0's depth at the pixel centre)
-/// for the fragment owning sample 0, else 0: the resolve reads it from sample 0 alone.
+/// for the fragment owning sample 0, else 0: the resolve reads it from sample 0 alone. Both
+/// shading closures get `data` (the light buffer) as an argument rather than capturing it: a
+/// closure holding a slice keeps the binding's length in its captures (`tests/spirv_lengths.rs`).
 #[inline]
-pub fn fragment_colours(samples: u32, owned: u32, alone_is_edge: impl Fn() -> bool, centre: impl Fn() -> u32, at_sample: impl Fn(u32) -> u32) -> (Vec3, u32) {
+pub fn fragment_colours<T: ?Sized>(data: &T, samples: u32, owned: u32, alone_is_edge: impl Fn() -> bool, centre: impl Fn(&T) -> u32, at_sample: impl Fn(&T, u32) -> u32) -> (Vec3, u32) {
     if owned == 0 || (owned == full_mask(samples) && !alone_is_edge()) {
-        let c = centre();
+        let c = centre(data);
         return (crate::lighting::decode_srgb8(c), c);
     }
-    let c = if owned & 1 != 0 { centre() } else { 0 };
+    let c = if owned & 1 != 0 { centre(data) } else { 0 };
     let mut sum = Vec3::ZERO;
     let mut count = 0u32;
     let mut s = 0;
     while s < samples {
         if owned & (1 << s) != 0 {
-            sum += crate::lighting::decode_srgb8(at_sample(s));
+            sum += crate::lighting::decode_srgb8(at_sample(data, s));
             count += 1;
         }
         s += 1;

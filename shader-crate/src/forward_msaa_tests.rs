@@ -23,27 +23,27 @@ fn a_whole_pixel_is_shaded_once_and_a_partial_one_per_sample() {
     let centre = 0xff_40_80_c0;
     let per_sample = |s: u32| [0xff_00_00_ff, 0xff_00_ff_00, 0xff_ff_00_00, 0xff_10_10_10][s as usize];
     // No sample (it writes none): the centre's colour for both.
-    let (edge, c) = fragment_colours(4, 0, || panic!("owns no sample"), || centre, |_| panic!());
+    let (edge, c) = fragment_colours(&(), 4, 0, || panic!("owns no sample"), |_| centre, |_, _| panic!());
     assert_eq!((encode_srgb8(edge), c), (centre, centre));
     // Every sample: the centre's colour, exactly (decoded; the resolve encodes it back).
     for samples in [2, 4, 8] {
-        let (edge, c) = fragment_colours(samples, full_mask(samples), || false, || centre, |_| panic!("no sample is shaded alone"));
+        let (edge, c) = fragment_colours(&(), samples, full_mask(samples), || false, |_| centre, |_, _| panic!("no sample is shaded alone"));
         assert_eq!((encode_srgb8(edge), c), (centre, centre), "{samples} samples");
     }
     // Every sample of a pixel the edge rule calls an edge (a surface seen edge-on): the mean of
     // the four, and the centre.
-    let (c, centre_all) = fragment_colours(4, 0b1111, || true, || centre, per_sample);
+    let (c, centre_all) = fragment_colours(&(), 4, 0b1111, || true, |_| centre, |_, s| per_sample(s));
     let all = (0..4).map(|s| decode_srgb8(per_sample(s))).fold(Vec3::ZERO, |a, b| a + b) * 0.25;
     assert!((c - all).abs().max_element() < 1e-7);
     assert_eq!(centre_all, centre);
     // Samples 0 and 2 of 4: the mean of their two colours, linear, and (holding sample 0) the
     // centre colour.
-    let (c02, centre02) = fragment_colours(4, 0b0101, || panic!("not alone"), || centre, per_sample);
+    let (c02, centre02) = fragment_colours(&(), 4, 0b0101, || panic!("not alone"), |_| centre, |_, s| per_sample(s));
     let want = (decode_srgb8(per_sample(0)) + decode_srgb8(per_sample(2))) * 0.5;
     assert!((c02 - want).abs().max_element() < 1e-7);
     assert_eq!(centre02, centre);
     // Samples 1 and 3: no centre colour (never read: the resolve reads sample 0's).
-    let (c13, centre13) = fragment_colours(4, 0b1010, || panic!("not alone"), || panic!("sample 0 is not its"), per_sample);
+    let (c13, centre13) = fragment_colours(&(), 4, 0b1010, || panic!("not alone"), |_| panic!("sample 0 is not its"), |_, s| per_sample(s));
     assert_eq!(centre13, 0);
     // Resolved as an edge pixel: the mean of all four samples' own colours.
     let resolved = crate::msaa::resolve(2.0 * c02 + 2.0 * c13, 4);

@@ -171,7 +171,8 @@ pub fn leaf_node_box(spheres: &[LightSphere], n: u32, b: u32, node: u32) -> Clus
     let first = node * b;
     let mut s = first;
     while s < first + b && s < n {
-        bx = union(&bx, &sphere_box(&spheres[s as usize]));
+        // In bounds: `s < n`, the sorted lights.
+        bx = union(&bx, &sphere_box(crate::unchecked::get(spheres, s)));
         s += 1;
     }
     bx
@@ -189,7 +190,8 @@ pub fn leaf_node_box_subgroup<C: Coop>(c: &C, spheres: &[LightSphere], n: u32, b
     let mut bx = EMPTY_BOX;
     let mut s = first + c.lane();
     while s < end {
-        bx = union(&bx, &sphere_box(&spheres[s as usize]));
+        // In bounds: `s < end ≤ n`.
+        bx = union(&bx, &sphere_box(crate::unchecked::get(spheres, s)));
         s += w;
     }
     let mut m = 1;
@@ -276,7 +278,7 @@ pub fn for_each_bvh_light(
             while s0 < last {
                 unroll8!(u => {
                     let s = s0 + u;
-                    if s < last && sphere_hits(&spheres[s as usize], cluster) {
+                    if s < last && sphere_hits(crate::unchecked::get(spheres, s), cluster) {
                         emit(found, order[s as usize]);
                         found += 1;
                     }

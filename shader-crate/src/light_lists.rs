@@ -29,18 +29,20 @@ pub const LIGHTS_PER_ITERATION: u32 = 8;
 /// for N ≤ 400 000.
 pub const MAX_LIGHTS_PER_INVOCATION_LLVMPIPE: u32 = 400_000;
 
-/// Lights `0..n` that `keep(index, light)`, in index order, [`LIGHTS_PER_ITERATION`] per loop
-/// iteration: calls `emit(k, light)` for the `k`-th and returns the count.
+/// Lights `0..n` that `keep(lights, index, light)`, in index order, [`LIGHTS_PER_ITERATION`] per
+/// loop iteration: calls `emit(k, light)` for the `k`-th and returns the count. `keep` gets the
+/// light buffer as an argument rather than capturing it: a closure that holds a slice keeps the
+/// binding's length in its captures on the GPU (`tests/spirv_lengths.rs`).
 #[inline]
-pub fn lights_kept(effects: u32, n: u32, lights: &[PointLight], mut emit: impl FnMut(u32, u32), keep: impl Fn(u32, &PointLight) -> bool) -> u32 {
+pub fn lights_kept(effects: u32, n: u32, lights: &[PointLight], mut emit: impl FnMut(u32, u32), keep: impl Fn(&[PointLight], u32, &PointLight) -> bool) -> u32 {
     let mut found = 0;
     let mut base = 0;
     while base < n {
         unroll8!(u => {
             let l = base + u;
             if l < n {
-                let light = crate::compact_light::light_at(lights, effects, l);
-                if keep(l, &light) {
+                let light = crate::compact_light::light_at(lights, effects, n, l);
+                if keep(lights, l, &light) {
                     emit(found, l);
                     found += 1;
                 }
@@ -54,14 +56,14 @@ pub fn lights_kept(effects: u32, n: u32, lights: &[PointLight], mut emit: impl F
 /// Lights `0..n` passing `test(centre, radius)` ([`lights_kept`]).
 #[inline]
 pub fn lights_meeting(effects: u32, n: u32, lights: &[PointLight], emit: impl FnMut(u32, u32), test: impl Fn(Vec3, f32) -> bool) -> u32 {
-    lights_kept(effects, n, lights, emit, move |_, light| test(Vec3::from_array(light.position), light.radius))
+    lights_kept(effects, n, lights, emit, move |_, _, light| test(Vec3::from_array(light.position), light.radius))
 }
 
 /// [`lights_meeting`] in a frame with spot lights: a light passes `test` and its cone may meet
 /// the sphere `(c, r)` bounding the region tested (`light_types::spot_may_meet`).
 #[inline]
 pub fn lights_meeting_spots(effects: u32, n: u32, lights: &[PointLight], emit: impl FnMut(u32, u32), test: impl Fn(Vec3, f32) -> bool, c: Vec3, r: f32) -> u32 {
-    lights_kept(effects, n, lights, emit, move |l, light| test(Vec3::from_array(light.position), light.radius) && crate::light_types::spot_may_meet(effects, lights, n, l, c, r))
+    lights_kept(effects, n, lights, emit, move |lights, l, light| test(Vec3::from_array(light.position), light.radius) && crate::light_types::spot_may_meet(effects, lights, n, l, c, r))
 }
 
 /// A global counter that hands out slots (`fetch_add` returns the old value).

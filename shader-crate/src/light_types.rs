@@ -171,7 +171,9 @@ pub fn directional_base(effects: u32, num_lights: u32) -> u32 {
 /// The cone of punctual light `l` (only with [`EFFECT_SPOT`]): record `num_lights + l`.
 #[inline]
 pub fn cone_of(lights: &[PointLight], num_lights: u32, l: u32) -> Cone {
-    let r = lights[(num_lights + l) as usize];
+    // In bounds: a spot scene's buffer holds a cone record per punctual light after them, and
+    // callers pass `l < num_lights` (the binding's length is never read: `compact_light::light_at`).
+    let r = crate::unchecked::at(lights, num_lights + l);
     Cone { direction: Vec3::from_array(r.position), cos_inner: r.radius, cos_outer: r.colour[0], sin_outer: r.colour[1] }
 }
 
@@ -201,7 +203,7 @@ pub fn spot_may_meet(effects: u32, lights: &[PointLight], num_lights: u32, l: u3
         return true;
     }
     // Spot scenes hold full records (`compact_light`): the record is the light.
-    let light = lights[l as usize];
+    let light = crate::compact_light::light_at(lights, effects, num_lights, l);
     cone_may_meet(effects, lights, num_lights, l, &light, c, r)
 }
 

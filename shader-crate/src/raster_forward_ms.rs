@@ -83,17 +83,18 @@ pub fn forward_colour_ms<const ARRAY: bool>(
     let n = g.width * g.height;
     let i = py * g.width + px;
     let owned = visible_samples(g.samples, covered, (f.count, primitive), move |s| (winners[(2 * (s * n + i)) as usize], winners[(2 * (s * n + i) + 1) as usize]));
-    let shade_at = move |pos: Vec3| shade_tile::<ARRAY>(f, px, py, &forward_surface(in_normal, front_facing, texel, p, materials, pos), tiles, entries, lights);
+    let shade_at = move |pos: Vec3, lights: &[PointLight]| shade_tile::<ARRAY>(f, px, py, &forward_surface(in_normal, front_facing, texel, p, materials, pos), tiles, entries, lights);
     // A pixel this fragment covers alone is an edge pixel where the edge rule says so of its
     // own samples (a surface seen edge-on): the keys the resolve will read back.
     let (precision, key_words, key_albedo) = (f.normal_precision, normal_words(normal, f.normal_precision), albedo_word(albedo));
     let alone_is_edge = move || is_edge(g.near, g.samples, move |s| sample_key(&g, precision, i, s, depth[(s * n + i) as usize], [key_words[0], key_words[1], key_words[2]], key_albedo));
     let (edge, centre) = fragment_colours(
+        lights,
         g.samples,
         owned,
         alone_is_edge,
-        move || shade_at(shading::pixel_position(&g, px, py, depth[i as usize])),
-        move |s| shade_at(sample_surface_position(&g, px, py, s, depth[(s * n + i) as usize])),
+        move |lights| shade_at(shading::pixel_position(&g, px, py, depth[i as usize]), lights),
+        move |lights, s| shade_at(sample_surface_position(&g, px, py, s, depth[(s * n + i) as usize]), lights),
     );
     MsOutputs { colour: colour_texel(edge, centre), normal, albedo, mask: owned }
 }

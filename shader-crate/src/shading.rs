@@ -402,11 +402,11 @@ fn shade_range<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, ef
     let mut t = first;
     while t < end {
         let l = list.at(t);
-        *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
+        *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
         t += 1;
         if t < end {
             let l = list.at(t);
-            *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
+            *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
             t += 1;
         }
     }
@@ -444,7 +444,7 @@ fn shade_next<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, eff
         return false;
     }
     *pos = next;
-    *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, l), shadows);
+    *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
     true
 }
 
@@ -457,18 +457,19 @@ pub fn shade_directional_lights<const SPECULAR: bool>(s: &Surface, frame_effects
     let count = directional_count(effects);
     let base = directional_base(effects, num_lights);
     // Straight-line, no loop: after a Forward+ fragment's list walk a second loop lost lights
-    // on lavapipe (the linked-list variant), and the count is at most 4 anyway.
+    // on lavapipe (the linked-list variant), and the count is at most 4 anyway. In bounds: the
+    // buffer ends with the `count` directional records from `base`.
     if count > 0 {
-        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[base as usize]);
+        *sum += shade_directional_record::<SPECULAR>(s, effects, crate::unchecked::get(lights, base));
     }
     if count > 1 {
-        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 1) as usize]);
+        *sum += shade_directional_record::<SPECULAR>(s, effects, crate::unchecked::get(lights, base + 1));
     }
     if count > 2 {
-        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 2) as usize]);
+        *sum += shade_directional_record::<SPECULAR>(s, effects, crate::unchecked::get(lights, base + 2));
     }
     if count > 3 {
-        *sum += shade_directional_record::<SPECULAR>(s, effects, &lights[(base + 3) as usize]);
+        *sum += shade_directional_record::<SPECULAR>(s, effects, crate::unchecked::get(lights, base + 3));
     }
 }
 

@@ -336,8 +336,8 @@ impl TileCull {
     /// ([`TileFrustum::bounding_sphere`], `light_types::spot_may_meet`).
     #[inline]
     pub fn keeps_pair(&self, lights: &[PointLight], n: u32, first: u32, effects: u32) -> (bool, bool) {
-        let a = first < n && self.keeps(&light_at(lights, effects, first));
-        let b = first + 1 < n && self.keeps(&light_at(lights, effects, first + 1));
+        let a = first < n && self.keeps(&light_at(lights, effects, n, first));
+        let b = first + 1 < n && self.keeps(&light_at(lights, effects, n, first + 1));
         if effects & crate::light_types::EFFECT_SPOT == 0 || n == 0 {
             return (a, b);
         }

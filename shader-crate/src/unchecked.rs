@@ -42,6 +42,20 @@ pub fn get<T>(s: &[T], i: u32) -> &T {
     }
 }
 
+/// `s[i] = v`, unchecked on the GPU. The caller guarantees `i < s.len()`.
+#[inline]
+pub fn set<T>(s: &mut [T], i: u32, v: T) {
+    #[cfg(target_arch = "spirv")]
+    {
+        // SAFETY: as in `at`.
+        unsafe { *spirv_std::arch::IndexUnchecked::index_unchecked_mut(s, i as usize) = v }
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        s[i as usize] = v;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,9 +1,10 @@
-//! The entry points of a SPIR-V module (SPIR-V specification §2.3 physical layout, §3 opcodes):
-//! name, execution model, local size, and the descriptor bindings of the storage buffers in each
-//! entry's interface (since SPIR-V 1.4 the interface lists every global variable the entry uses).
+//! SPIR-V modules read for tests (SPIR-V specification §2.3 physical layout, §3 opcodes): a
+//! module's words and instructions, and its entry points — name, execution model, local size,
+//! and the descriptor bindings of the storage buffers in each entry's interface (since SPIR-V 1.4
+//! the interface lists every global variable the entry uses).
 use std::collections::HashMap;
 
-const MAGIC: u32 = 0x0723_0203;
+pub const MAGIC: u32 = 0x0723_0203;
 const OP_ENTRY_POINT: u32 = 15;
 const OP_EXECUTION_MODE: u32 = 16;
 const OP_VARIABLE: u32 = 59;
@@ -28,20 +29,34 @@ pub struct EntryPoint {
     pub storage_buffers: Vec<(u32, u32)>,
 }
 
+/// The little-endian words of a module's bytes.
+pub fn words(module: &[u8]) -> Vec<u32> {
+    assert!(module.len().is_multiple_of(4) && module.len() >= 20, "not a SPIR-V module ({} bytes)", module.len());
+    module.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+}
+
+/// The instructions of a module as `(opcode, operands)`; panics on a malformed module.
+pub fn instructions(words: &[u32]) -> Vec<(u32, &[u32])> {
+    assert!(words.len() >= 5 && words[0] == MAGIC, "not a SPIR-V module");
+    let mut out = Vec::new();
+    let mut at = 5;
+    while at < words.len() {
+        let count = (words[at] >> 16) as usize;
+        assert!(count > 0 && at + count <= words.len(), "truncated instruction at word {at}");
+        out.push((words[at] & 0xffff, &words[at + 1..at + count]));
+        at += count;
+    }
+    out
+}
+
 /// Every entry point of `module`; panics on a malformed module.
 pub fn entry_points(module: &[u8]) -> Vec<EntryPoint> {
-    assert!(module.len().is_multiple_of(4) && module.len() >= 20, "not a SPIR-V module ({} bytes)", module.len());
-    let words: Vec<u32> = module.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-    assert_eq!(words[0], MAGIC, "SPIR-V magic number");
+    let words = words(module);
     let mut entries: Vec<(u32, EntryPoint, Vec<u32>)> = Vec::new();
     let mut local_size: HashMap<u32, [u32; 3]> = HashMap::new();
     let mut storage_buffers: Vec<u32> = Vec::new();
     let (mut sets, mut bindings): (HashMap<u32, u32>, HashMap<u32, u32>) = Default::default();
-    let mut at = 5;
-    while at < words.len() {
-        let (count, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
-        assert!(count > 0 && at + count <= words.len(), "truncated instruction at word {at}");
-        let ops = &words[at + 1..at + count];
+    for (opcode, ops) in instructions(&words) {
         match opcode {
             OP_ENTRY_POINT => {
                 let (name, rest) = string(&ops[2..]);
@@ -59,7 +74,6 @@ pub fn entry_points(module: &[u8]) -> Vec<EntryPoint> {
             }
             _ => {}
         }
-        at += count;
     }
     entries
         .into_iter()
@@ -80,7 +94,7 @@ pub fn entry_points(module: &[u8]) -> Vec<EntryPoint> {
 }
 
 /// A literal string (UTF-8, NUL-terminated, padded to whole words) and the words after it.
-fn string(words: &[u32]) -> (String, &[u32]) {
+pub fn string(words: &[u32]) -> (String, &[u32]) {
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     let len = bytes.iter().position(|&b| b == 0).expect("unterminated SPIR-V string");
     (String::from_utf8(bytes[..len].to_vec()).expect("UTF-8 SPIR-V string"), &words[len / 4 + 1..])

@@ -71,7 +71,7 @@ impl LightBvh {
             branching,
             keys: Buffer::storage(ctx, "light Morton keys", 4 * n as u64)?,
             order: Buffer::storage(ctx, "light order", 4 * n as u64)?,
-            spheres: Buffer::storage(ctx, "sorted light spheres", 16 * n.max(1) as u64)?,
+            spheres: Buffer::length_free(ctx, "sorted light spheres", 16 * n.max(1) as u64)?,
             nodes: Buffer::storage(ctx, "light BVH nodes", 32 * nodes as u64)?,
             sort: LightSorter::new(gpu, sort, n.max(1))?,
             quantizers: quantizers(lo, hi, n, morton_bits),

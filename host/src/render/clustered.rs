@@ -78,6 +78,7 @@ pub const CLUSTERED_NAIVE: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    light_words: 1,
     shadows: true,
 };
 

@@ -36,6 +36,7 @@ pub const CLUSTERED_AABB: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    light_words: 0,
     shadows: true,
 };
 

@@ -25,6 +25,7 @@ pub const DEFERRED: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    light_words: 0,
     shadows: true,
 };
 

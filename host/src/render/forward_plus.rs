@@ -130,6 +130,7 @@ pub const FORWARD_PLUS: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    light_words: 0,
     shadows: false,
 };
 

@@ -90,7 +90,10 @@ mod tests {
     fn limits_per_binding() {
         let range = i32::MAX as u64;
         assert_eq!(LightRecord::Full.max_lights_in(range), (1 << 26) - 1);
-        assert_eq!(LightRecord::Compact.max_lights_in(range), MAX_COMPACT_LIGHTS as u64);
+        assert_eq!(LightRecord::Compact.max_lights_in(range), (1 << 27) - 4);
+        assert_eq!(LightRecord::Full.max_lights_in(u32::MAX as u64), (1 << 27) - 1);
+        assert_eq!(LightRecord::Compact.max_lights_in(u32::MAX as u64), MAX_COMPACT_LIGHTS as u64);
+        assert_eq!(MAX_COMPACT_LIGHTS, (1 << 28) - 4);
         assert_eq!(LightRecord::Compact.max_lights_in(32 << 10), 2 * 1023, "the header takes one record");
         assert_eq!(LightRecord::Compact.max_lights_in(0), 0);
     }
@@ -106,7 +109,7 @@ mod tests {
         assert!(light_buffer(LightRecord::Compact, &view, vec![l], &[], &[sun]).is_err());
         let (records, seen, moved) = light_buffer(LightRecord::Compact, &view, vec![l, l], &[None, None], &[]).unwrap();
         assert_eq!((records.len(), moved), (2, 0.0), "one position is the grid's origin");
-        assert_eq!(seen, vec![compact_light::compact_at(&records, 0); 2]);
+        assert_eq!(seen, vec![compact_light::compact_at(&records, 2, 0); 2]);
         assert_eq!(seen[0].colour, [1.5, 0.75, 3.0]);
         let (full, seen, moved) = light_buffer(LightRecord::Full, &view, vec![l], &[], &[]).unwrap();
         assert_eq!((full, seen, moved), (vec![l], vec![l], 0.0));

@@ -35,6 +35,7 @@ pub const RASTER_TILED: Description = Description {
     own_kernels: handles::COMPUTE,
     own_raster: handles::RASTER,
     msaa: true,
+    light_words: RECT_WORDS,
     shadows: true,
 };
 

@@ -233,7 +233,7 @@ impl Renderer {
         let targets = gbuffer::Targets::new(ctx, s.width, s.height, s.normal_precision.code(), gbuffer_samples, s.msaa).context("allocating the G-buffer")?;
         let msaa = super::msaa::Multisampling::new(gpu, gbuffer_samples, n as u64).context("creating the MSAA passes")?;
         let textures = gbuffer::Textures::upload(ctx, &scene.textures).context("uploading textures")?;
-        let lights = Buffer::from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
+        let lights = Buffer::length_free_from_slice(ctx, "lights", &records).context("allocating the light buffer")?;
         let materials = Buffer::from_slice(ctx, "materials", &scene.materials)?;
         let bounds = slice_bounds(&grid);
         let bounds_buf = Buffer::from_slice(ctx, "slice bounds", &bounds)?;
@@ -405,7 +405,7 @@ impl Renderer {
             return Ok(());
         }
         check_light_count(gpu, lights_view.len())?;
-        let lights = Buffer::from_slice(&gpu.ctx, "lights", &records).context("allocating the light buffer")?;
+        let lights = Buffer::length_free_from_slice(&gpu.ctx, "lights", &records).context("allocating the light buffer")?;
         let old_lights = std::mem::replace(&mut self.res.lights, lights);
         let old_view = std::mem::replace(&mut self.res.lights_view, lights_view);
         let old_count = std::mem::replace(&mut self.res.params.num_lights, world_lights.len() as u32);

@@ -155,6 +155,9 @@ pub struct Description {
     /// `render/msaa.rs`: [`FrameInputs::msaa`] is then set and its `record` adds the edge pass);
     /// `--msaa` above 1 is refused in one line for the others.
     pub msaa: bool,
+    /// 32-bit words per light of the largest buffer it keeps per light besides the light buffer
+    /// (bound whole, so below 2^31 bytes: the preflight's light limit names it); 0 for none.
+    pub light_words: u32,
     /// Whether its shading multiplies each shadow-casting light by its visibility from the
     /// frame's cube shadow maps (`shadow_maps.rs`; it binds [`FrameInputs::shadow_buffers`]);
     /// scenes with shadow-casting lights are refused in one line for the others.

@@ -27,6 +27,7 @@ pub const TILED: Description = Description {
     own_kernels: &[],
     own_raster: &[],
     msaa: true,
+    light_words: 0,
     shadows: true,
 };
 

@@ -110,7 +110,7 @@ pub fn default_radius(bounds: (Vec3, Vec3), n: usize) -> f32 {
 
 fn check(n: usize, bounds: (Vec3, Vec3)) -> Result<()> {
     if n > MAX_LIGHTS {
-        bail!("{n} lights requested, more than the {MAX_LIGHTS} supported (2 GiB of compact records)");
+        bail!("{n} lights requested, more than the {MAX_LIGHTS} supported (4 GiB of compact records)");
     }
     ensure!(bounds.0.is_finite() && bounds.1.is_finite() && (bounds.1 - bounds.0).is_finite(), "light bounds {bounds:?} are not finite in 32-bit floats");
     ensure!(bounds.0.cmple(bounds.1).all(), "light bounds {bounds:?} have a minimum above the maximum");

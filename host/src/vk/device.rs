@@ -41,7 +41,10 @@ pub struct DeviceInfo {
     /// The largest storage-buffer binding the kernels may use: `maxStorageBufferRange`, below
     /// [`MAX_BINDING_BYTES`] ([`usable_storage_range`]).
     pub max_storage_buffer_range: u32,
-    /// `maxStorageBufferRange` as the device reports it.
+    /// `maxStorageBufferRange` as the device reports it: the range of the bindings whose
+    /// length no kernel reads (the light buffer, the light BVH's sorted spheres:
+    /// `shaders::compact_light::light_at`, `tests/spirv_lengths.rs`). The driver that reads a
+    /// binding of 2^31 bytes as empty ([`MAX_BINDING_BYTES`]) does so through its length.
     pub reported_storage_buffer_range: u32,
     /// Largest width or height of a 2D image (`maxImageDimension2D`; lavapipe: 16384).
     pub max_image_dimension_2d: u32,
@@ -64,7 +67,10 @@ pub struct DeviceInfo {
 /// (driver 580.159.04) the shaders read a binding of exactly 2^31 bytes as holding nothing: 2^26
 /// lights of 32 bytes rendered a black frame, 2^26 − 1 a lit one (`docs/results/h200/
 /// light-buffer-boundary/`), so byte sizes are kept within a signed 32-bit range whatever the
-/// device reports.
+/// device reports. The cause is the binding's length (`OpArrayLength`): the buffers whose length
+/// no kernel reads (`memory::Buffer::length_free`: the lights, the BVH's sorted spheres) take the
+/// whole reported range, and read correctly past 2^31 bytes (`docs/results/h100/
+/// lights-past-2gib/`: 2^26 lights of 32 bytes list their lights).
 pub const MAX_BINDING_BYTES: u32 = i32::MAX as u32;
 
 /// The storage-buffer range the renderer uses on a device reporting `maxStorageBufferRange =

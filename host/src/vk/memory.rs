@@ -37,9 +37,27 @@ impl Buffer {
     /// A buffer of at least `size` bytes. A storage buffer (bound whole by every kernel) larger
     /// than one binding can address ([`check_range`]) is refused before anything is allocated.
     pub fn new(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> VkResult<Self> {
+        Self::new_within(ctx, name, size, usage, location, ctx.info.max_storage_buffer_range as u64)
+    }
+
+    /// [`Buffer::new`] for a storage buffer whose length no kernel reads: it may take the whole
+    /// `maxStorageBufferRange` the device reports (`DeviceInfo::reported_storage_buffer_range`:
+    /// 4 GiB − 1 on NVIDIA), past the 2^31 − 1 bytes of the other bindings.
+    pub fn length_free(ctx: &Context, name: &str, size: u64) -> VkResult<Self> {
+        Self::new_within(ctx, name, size, STORAGE, MemoryLocation::GpuOnly, ctx.info.reported_storage_buffer_range as u64)
+    }
+
+    /// [`Buffer::from_slice`] in a [`Buffer::length_free`] buffer.
+    pub fn length_free_from_slice<T: Pod>(ctx: &Context, name: &str, data: &[T]) -> VkResult<Self> {
+        let mut b = Self::length_free(ctx, name, std::mem::size_of_val(data) as u64)?;
+        b.write(data)?;
+        Ok(b)
+    }
+
+    fn new_within(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, range: u64) -> VkResult<Self> {
         let size = size.max(MIN_BUFFER_BYTES).next_multiple_of(4);
-        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) {
-            check_range(ctx, name, size)?;
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > range {
+            return Err(VkError::TooLarge { what: name.into(), bytes: size, max: range });
         }
         let d = &ctx.device;
         // With an async-compute queue, buffers are shared by both families (CONCURRENT), so work

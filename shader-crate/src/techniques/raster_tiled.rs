@@ -163,7 +163,7 @@ pub fn tile_keeps(p: &FrameParams, tile_depths: &[u32], lights: &[PointLight], t
         return false;
     }
     let f = tile_frustum(g, tx, ty, f32::from_bits(lo), f32::from_bits(hi));
-    let light = &crate::compact_light::light_at(lights, p.effects, l);
+    let light = &crate::compact_light::light_at(lights, p.effects, p.num_lights, l);
     if !sphere_in_tile(&f, Vec3::from_array(light.position), light.radius) {
         return false;
     }
@@ -232,7 +232,7 @@ pub fn light_rects(
     if l >= p.count {
         return;
     }
-    let t = light_tiles(&p.grid, &crate::compact_light::light_at(lights, light_types, l));
+    let t = light_tiles(&p.grid, &crate::compact_light::light_at(lights, light_types, p.count, l));
     let ndc = if t[0] == t[2] { [0.0; 4] } else { tiles_to_ndc(&p.grid, t) };
     let mut k = 0;
     while k < RECT_WORDS {
