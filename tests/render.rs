@@ -95,6 +95,22 @@ fn city_1k_and_10k_lights_equal_the_reference() {
             frame(&gpu, &scene, &l, &s).readback.unwrap().list
         };
         assert_ne!(list(10), list(2), "city {n}: 2 and 10 Morton bits per axis list the lights in the same order");
+        // `--light-order spatial` (`Scene::order_lights_spatially`): the same lights under other
+        // indices: the same image within 1/255, and the same references once mapped back.
+        let order = lights::spatial_order(&l);
+        let mut spatial = scene.clone();
+        spatial.lights = l.clone();
+        spatial.order_lights_spatially();
+        let s = Settings { bvh_branching: 64, sort: SortKind::Radix, read_back: true, ..common::render::settings(192, 108, Technique::ClusteredBvh) };
+        let (given, moved) = (frame(&gpu, &scene, &l, &s), frame(&gpu, &scene, &spatial.lights, &s));
+        let worst = worst_channel(&given.pixels, &moved.pixels);
+        assert!(worst <= 1, "city {n}: the spatial order changes the image by {worst}/255");
+        let (mut a, moved) = (given.readback.unwrap().list, moved.readback.unwrap().list);
+        assert_ne!(a, moved, "city {n}: the spatial order lists the lights under the same indices");
+        let mut b: Vec<u32> = moved.iter().map(|&k| order[k as usize]).collect();
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b, "city {n}: the spatial order lists other lights");
         assert!(f.unique_clusters > 10 && f.light_refs > 0, "city {n}: {} clusters, {} refs", f.unique_clusters, f.light_refs);
         let lit = lit(&f.pixels);
         assert!(lit * 4 > f.pixels.len(), "city {n}: the frame should be mostly lit, {lit} of {} pixels", f.pixels.len());

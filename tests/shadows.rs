@@ -338,10 +338,12 @@ fn faces_take_what_their_receivers_ask_and_a_short_atlas_halves_them() {
     common::assert_clean(&gpu);
 }
 
-/// A spot light takes only the faces its cone lights: aimed past the wall and down, its cone
-/// (40° outer half-angle) meets fewer faces than the same light as a point light; aimed straight
-/// down from higher up, one face; every frame matches the ray-cast reference (which shades the cone's falloff
-/// and exact visibility).
+/// A spot light takes only the faces its cone lights, its cube turned to its cone
+/// (`shadow::CubeFrame`): aimed past the wall and down with a 40° outer half-angle, one face
+/// (fewer texels than the same light as a point light); aimed straight down from higher up, one
+/// face; a 60° cone, wider than a face, at most the three faces around the corner it is centred
+/// on. Every frame matches the ray-cast reference (which shades the cone's falloff and exact
+/// visibility): the turned cube draws and looks up the same shadows.
 #[test]
 fn a_spot_light_takes_only_the_faces_its_cone_lights() {
     let gpu = common::gpu();
@@ -353,8 +355,12 @@ fn a_spot_light_takes_only_the_faces_its_cone_lights() {
     let (shadowed, cone) = assert_matches_reference(&gpu, &spot, ShadowSettings::default(), "spot light");
     eprintln!("faces with receivers: point light {}, spot light {}", all.faces_with_receivers, cone.faces_with_receivers);
     assert!(shadowed > 3000, "{shadowed} pixels in shadow");
-    assert!(cone.faces_with_receivers >= 1 && cone.faces_with_receivers < all.faces_with_receivers, "{cone:?} against {all:?}");
+    assert!(all.faces_with_receivers > 1, "{all:?}");
+    assert_eq!(cone.faces_with_receivers, 1, "a 40° cone lies in one face of its turned cube: {cone:?} against {all:?}");
     assert!(cone.atlas_used < all.atlas_used, "{cone:?} against {all:?}");
+    let wide = scene_of(&dir, FLOOR_AND_WALL, &description("shadows = true\ntype = \"spot\"\ndirection = [1, -0.6, 0.3]\nouter_angle = 60\n"));
+    let (_, corner) = assert_matches_reference(&gpu, &wide, ShadowSettings::default(), "wide spot light");
+    assert!((1..=3).contains(&corner.faces_with_receivers), "a 60° cone lies in the three faces around a corner: {corner:?}");
     // 6 m over the floor, aimed down one face's axis with a cone narrower than the face's 45°:
     // that face alone (the wall still shadows the floor behind it, 0 < x < 1, inside the cone).
     let down = scene_of(&dir, FLOOR_AND_WALL, &description_at([-2.0, 6.0, 0.0], "shadows = true\ntype = \"spot\"\ndirection = [0, -1, 0]\nouter_angle = 40\n"));

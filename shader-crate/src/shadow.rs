@@ -20,8 +20,12 @@
 //!    compared with the stored one, one texel or the bilinear weights of four
 //!    ([`SHADOW_FILTER_BILINEAR`], percentage-closer filtering).
 //!
-//! **Faces.** Face `f` looks along axis `f / 2` of view space, towards `+` for even `f` and `−`
-//! for odd ([`face_axes`]); a direction `d` from the light belongs to the face of its largest
+//! **Faces.** Face `f` looks along axis `f / 2` of the light's cube, towards `+` for even `f` and
+//! `−` for odd ([`face_axes`]). A point light's cube is laid along view space's axes, a spot
+//! light's is turned to its cone ([`CubeFrame`]: a cone of at most 42° centred on one face, a
+//! wider one on the corner of three), and every offset from the light enters the face
+//! functions in the cube's axes ([`CubeFrame::local`]). A direction `d` from the light belongs
+//! to the face of its largest
 //! component ([`cube_face`]), where `u = d·right / d·forward`, `v = d·up / d·forward` lie in
 //! [−1, 1], and texel `(x, y) = ⌊((u, v) + 1) / 2 · res⌋`: the viewport transform of the clip
 //! position `(d·right, d·up, ·, d·forward)` ([`face_clip`]), so the raster and the lookup agree
@@ -74,10 +78,87 @@ pub const SHADOW_FILTER_BILINEAR: u32 = 1;
 pub const CASTER_WORDS: u32 = 8;
 /// The cone word of a point light's record (below every cosine).
 pub const NO_CONE: f32 = -2.0;
+/// Margin in radians of the cone tests on spot lights' shadows (`shadow_receivers`,
+/// `shadow_cull`), for rounding.
+pub const CONE_MARGIN: f32 = 1e-3;
 /// The receiver's offset along its normal, in texels at its distance (module docs).
 pub const NORMAL_OFFSET_TEXELS: f32 = 1.5;
 /// Distance tolerance of the comparison, in texels at the receiver's distance.
 pub const DEPTH_BIAS_TEXELS: f32 = 1.0;
+
+/// Cosine of the widest outer half-angle (42°) whose cone a caster's [`CubeFrame`] centres on
+/// one face: the face's pyramid holds every direction within 45° of its axis, and the 3° left
+/// cover the lookup's offset angle, `asin(3 / side)`, on faces of 64² texels and more
+/// (`shadow_receivers::spot_faces`).
+pub const FACE_CONE_COS: f32 = 0.743_144_8;
+/// `1/√2`, `1/√3`, `1/√6`: the rotation taking `+z` to the cube's corner `(1, 1, 1)/√3`.
+const INV_SQRT2: f32 = core::f32::consts::FRAC_1_SQRT_2;
+const INV_SQRT3: f32 = 0.577_350_26;
+const INV_SQRT6: f32 = 0.408_248_3;
+
+/// The axes a caster's cube is laid along (rows: the cube's x, y, z in view space). A point
+/// light's cube uses view space's own axes; a spot light's is turned to its cone: a cone of at
+/// most 42° ([`FACE_CONE_COS`]) about the centre of face 4 (`+z`), so one face holds it; a wider
+/// one about the corner `(1, 1, 1)/√3` of faces 0, 2 and 4, which hold every direction within
+/// 70.5° of it (the nearest direction of another face, `(1, 1, −1)/√3`, lies `acos(1/3)` away).
+/// The raster, the cull, the receivers' faces and the lookup all see offsets through
+/// [`CubeFrame::local`], built from the same record bits (`caster_record`, the cone record of
+/// the light buffer: both from the one view-space axis and `cos(outer)`).
+///
+/// ```text
+///  face-centred (outer ≤ 42°)      corner-centred (42° < outer)
+///     cube z = axis                 cube (1,1,1)/√3 = axis
+///       ┌─────┐                          ╱╲
+///       │  ●  │  face 4               ╱ ● ╲   faces 0, 2, 4 meet at ●
+///       └─────┘                        ╲  ╱
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CubeFrame {
+    pub x: Vec3,
+    pub y: Vec3,
+    pub z: Vec3,
+}
+
+impl CubeFrame {
+    /// View space's own axes (point lights).
+    pub const VIEW: CubeFrame = CubeFrame { x: Vec3::X, y: Vec3::Y, z: Vec3::Z };
+
+    /// The frame of a light with cone `axis` (unit, view space) and outer cosine `cos_outer`:
+    /// [`Self::VIEW`] where `cos_outer` is below −1 (a point light: [`NO_CONE`], the light
+    /// buffer's point marker). The basis about the axis is Duff et al.'s ("Building an
+    /// orthonormal basis, revisited", JCGT 2017): `(t, s, axis)` right-handed, continuous but
+    /// for the sign of `axis.z`.
+    #[inline]
+    pub fn of_cone(axis: Vec3, cos_outer: f32) -> Self {
+        if !(cos_outer >= -1.0) {
+            return Self::VIEW;
+        }
+        let sign = if axis.z >= 0.0 { 1.0 } else { -1.0 };
+        let a = -1.0 / (sign + axis.z);
+        let b = axis.x * axis.y * a;
+        let t = Vec3::new(1.0 + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
+        let s = Vec3::new(b, sign + axis.y * axis.y * a, -axis.y);
+        if cos_outer >= FACE_CONE_COS {
+            return CubeFrame { x: t, y: s, z: axis };
+        }
+        // Rows of C · (t, s, axis), C's columns (1, −1, 0)/√2, (1, 1, −2)/√6, (1, 1, 1)/√3.
+        let (t2, s6, a3) = (t * INV_SQRT2, s * INV_SQRT6, axis * INV_SQRT3);
+        CubeFrame { x: t2 + s6 + a3, y: s6 + a3 - t2, z: a3 - 2.0 * s6 }
+    }
+
+    /// The frame of caster `c`'s record ([`caster_record`]).
+    #[inline]
+    pub fn of_caster(casters: &[f32], c: u32) -> Self {
+        let k = (c * CASTER_WORDS) as usize;
+        Self::of_cone(Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7])
+    }
+
+    /// View-space offset `d` in the cube's axes.
+    #[inline]
+    pub fn local(&self, d: Vec3) -> Vec3 {
+        Vec3::new(self.x.dot(d), self.y.dot(d), self.z.dot(d))
+    }
+}
 
 /// `(right, up, forward)` of face `f` (module docs): forward along axis `f / 2`, signed by `f`'s
 /// parity; right and up the two following axes.
@@ -126,9 +207,9 @@ pub fn face_texel(d: Vec3, f: u32, res: u32) -> (f32, f32) {
 
 /// Where the shading reads shadows from.
 pub trait Shadowing {
-    /// The share of light `l` (at `light`, view space) that reaches `pos` with unit normal
-    /// `normal`: 1 where nothing lies between, 0 in shadow.
-    fn visibility(&self, l: u32, light: Vec3, pos: Vec3, normal: Vec3) -> f32;
+    /// The share of light `l` (at `light`, view space, its cube laid along `frame`) that reaches
+    /// `pos` with unit normal `normal`: 1 where nothing lies between, 0 in shadow.
+    fn visibility(&self, l: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32;
 }
 
 /// Every light reaches every point (the kernels of scenes without shadow-casting lights).
@@ -136,7 +217,7 @@ pub struct NoShadows;
 
 impl Shadowing for NoShadows {
     #[inline]
-    fn visibility(&self, _l: u32, _light: Vec3, _pos: Vec3, _normal: Vec3) -> f32 {
+    fn visibility(&self, _l: u32, _light: Vec3, _frame: &CubeFrame, _pos: Vec3, _normal: Vec3) -> f32 {
         1.0
     }
 }
@@ -151,12 +232,12 @@ pub struct CubeShadows<'a> {
 
 impl Shadowing for CubeShadows<'_> {
     #[inline]
-    fn visibility(&self, l: u32, light: Vec3, pos: Vec3, normal: Vec3) -> f32 {
+    fn visibility(&self, l: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32 {
         let slot = self.slots[(SHADOW_HEADER_WORDS + l) as usize];
         if slot == NO_SHADOW {
             return 1.0;
         }
-        cube_visibility(self.maps, self.slots, slot, self.slots[1], light, pos, normal)
+        cube_visibility(self.maps, self.slots, slot, self.slots[1], light, frame, pos, normal)
     }
 }
 
@@ -175,9 +256,10 @@ pub fn face_entry(slots: &[u32], map: u32) -> (u32, u32) {
 /// receiver's own face is looked up at its edge instead; where the receiver's own face holds none
 /// (no lit receiver lies there), the light passes.
 #[inline]
-pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, light: Vec3, pos: Vec3, normal: Vec3) -> f32 {
+#[allow(clippy::too_many_arguments)]
+pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32 {
     let to_light = light - pos;
-    let at = cube_face(-to_light);
+    let at = cube_face(frame.local(-to_light));
     let (base_at, res_at) = face_entry(slots, slot * FACES + at);
     if res_at == 0 {
         return 1.0;
@@ -186,6 +268,7 @@ pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, ligh
     let n = if normal.dot(to_light) < 0.0 { -normal } else { normal };
     let d = pos + n * (NORMAL_OFFSET_TEXELS * texel) - light;
     let reach = d.length() - DEPTH_BIAS_TEXELS * texel;
+    let d = frame.local(d);
     let f = cube_face(d);
     let (base, res) = face_entry(slots, slot * FACES + f);
     if res == 0 {
@@ -194,7 +277,7 @@ pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, ligh
     face_visibility(maps, base, res, filter, d, f, reach)
 }
 
-/// The lookup of direction `d` on face `f` (`res × res` texels from texel `base` of `maps`): lit
+/// The lookup of direction `d` (in the cube's axes, [`CubeFrame::local`]) on face `f` (`res × res` texels from texel `base` of `maps`): lit
 /// where the stored distance is at least `reach`, one texel or four bilinearly weighted.
 #[inline]
 pub fn face_visibility(maps: &[u32], base: u32, res: u32, filter: u32, d: Vec3, f: u32, reach: f32) -> f32 {

@@ -7,9 +7,13 @@
 //!
 //! Steps (host: `render/shadow_maps.rs`; the maps themselves: `shadow`):
 //! 1. **Cull** ([`shadow_cull`], one invocation per batch and caster, [`cull_batch`]): the batch's
-//!    sphere moved into view space, tested against the caster's six faces; each face it meets
-//!    that has receivers on screen (`shadow_receivers`, run before) takes an entry `(batch, map)` (`map = caster · 6 + face`) from a counter. Entries past the
-//!    capacity are counted and not written.
+//!    sphere moved into view space, tested against the caster's six faces (in its cube's axes,
+//!    `shadow::CubeFrame`); each face it meets that has receivers on screen
+//!    (`shadow_receivers`, run before; its side in the face table) takes an entry
+//!    `(batch, map)` (`map = caster · 6 + face`) from a counter — for a spot light only where
+//!    the sphere also meets the cone widened by the texels a lookup on that face can read
+//!    ([`batch_meets_cone`]: occluders outside it shadow nothing the spot lights). Entries past
+//!    the capacity are counted and not written.
 //! 2. **Arguments** ([`shadow_draw_args`], one invocation, [`draw_args`]): the indirect draw's
 //!    vertex count, `3 ·` [`BATCH_TRIANGLES`] per written entry.
 //! 3. **Raster**, in a compute kernel (`shadow_raster`, `--shadow-raster compute`) or drawn
@@ -20,15 +24,17 @@
 //!    radius, or outside a side plane of the face), are put behind the light (`w < 0`: clipped
 //!    whole, never set up).
 //!
-//! **Capacity.** The host counts the entries with the same [`face_mask`] on spheres widened by
-//! [`CULL_MARGIN`] of their distance (`shadow_maps::ShadowMaps`), so rounding on the GPU cannot
+//! **Capacity.** The host counts the entries with the same [`face_mask`] (without the cone test:
+//! an upper bound) on spheres widened by [`CULL_MARGIN`] of their distance (`shadow_maps::ShadowMaps`), so rounding on the GPU cannot
 //! add an entry the count left out; the frame loop still reads the counter back and fails
 //! rather than drop triangles.
 //!
 //! **Memory:** [`BATCH_WORDS`]` · 4` = 32 B per batch (0.5 B per triangle), [`ENTRY_WORDS`]` · 4`
 //! = 8 B per entry, [`ARGS_WORDS`]` · 4` B of arguments.
-use crate::shadow::{face_axes, face_clip, FACES};
+use crate::shadow::{face_axes, face_clip, CubeFrame, FACES};
 use glam::{Mat4, Vec3, Vec4};
+#[cfg(target_arch = "spirv")]
+use spirv_std::num_traits::Float;
 #[cfg(any(feature = "compute", feature = "graphics"))]
 use spirv_std::spirv;
 
@@ -107,25 +113,53 @@ pub fn batch_sphere(batches: &[u32], b: u32) -> (Vec3, f32) {
     (Vec3::new(f32::from_bits(batches[w]), f32::from_bits(batches[w + 1]), f32::from_bits(batches[w + 2])), f32::from_bits(batches[w + 3]))
 }
 
-/// Step 1 for batch `b` and caster `c` (`casters`: view-space position and radius per caster;
-/// `view`: the position buffer's space → view space, a rotation; `needed`: per caster face, its
-/// level, 0 without receivers, `shadow_receivers`): appends an entry per face met that has
-/// receivers.
+/// Texels a lookup can read away from its receiver's own direction: the normal offset
+/// (`shadow::NORMAL_OFFSET_TEXELS`, 1.5), the bilinear filter's neighbour (1) and half a texel
+/// from the lookup point to a texel's centre.
+pub const LOOKUP_SPREAD_TEXELS: f32 = 3.0;
+
+/// Whether a batch's sphere (offset `d` from a spot light of `radius`, sphere radius `r`) may
+/// hold an occluder that a receiver inside the cone (unit `axis`, outer cosine `cos_outer`)
+/// looks up on a face of `side` texels: a point the spot lights lies in its cone, the segment
+/// to it too, and its lookup reads texels at most [`LOOKUP_SPREAD_TEXELS`] texels of angle
+/// (each at most `2 / side` radians) away; so the cone widened by that angle
+/// (`spot::cone_meets_sphere`) holds every occluder a lookup can see. Always for a point light.
+#[inline]
+pub fn batch_meets_cone(d: Vec3, r: f32, radius: f32, axis: Vec3, cos_outer: f32, side: u32) -> bool {
+    if !(cos_outer >= -1.0) {
+        return true;
+    }
+    let c = if cos_outer > 1.0 { 1.0 } else { cos_outer };
+    let angle = c.acos() + 2.0 * LOOKUP_SPREAD_TEXELS / side as f32 + crate::shadow::CONE_MARGIN;
+    if angle >= core::f32::consts::PI {
+        return true;
+    }
+    let cone = crate::spot::Cone { direction: axis, cos_inner: 1.0, cos_outer: angle.cos(), sin_outer: angle.sin() };
+    crate::spot::cone_meets_sphere(Vec3::ZERO, &cone, radius, d, r)
+}
+
+/// Step 1 for batch `b` and caster `c` (`casters`: caster records, `shadow::caster_record`;
+/// `view`: the position buffer's space → view space, a rotation; `slots`: the face table,
+/// `shadow::face_entry`, side 0 for a face without receivers): appends an entry per face met
+/// that has receivers (for a spot light, only where the batch meets its cone widened by the
+/// lookup's spread on that face, [`batch_meets_cone`]).
 #[cfg(feature = "compute")]
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: &ShadowCullParams, view: Mat4, batches: &[u32], casters: &[f32], needed: &[u32], entries: &mut [u32], counted: &mut A) {
+pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: &ShadowCullParams, view: Mat4, batches: &[u32], casters: &[f32], slots: &[u32], entries: &mut [u32], counted: &mut A) {
     if b >= p.batches || c >= p.casters {
         return;
     }
     let (centre, r) = batch_sphere(batches, b);
     let k = (c * crate::shadow::CASTER_WORDS) as usize;
     let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
-    let d = (view * centre.extend(1.0)).truncate() - light;
-    let mask = face_mask(d, r, casters[k + 3]);
+    let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
+    let offset = (view * centre.extend(1.0)).truncate() - light;
+    let mask = face_mask(CubeFrame::of_cone(axis, cos_outer).local(offset), r, casters[k + 3]);
     let mut f = 0;
     while f < FACES {
-        if mask & (1 << f) != 0 && needed[(c * FACES + f) as usize] != 0 {
+        let side = crate::shadow::face_entry(slots, c * FACES + f).1;
+        if mask & (1 << f) != 0 && side != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, cos_outer, side) {
             let slot = counted.fetch_add(1);
             if slot < p.capacity {
                 entries[(slot * ENTRY_WORDS) as usize] = b;
@@ -177,12 +211,24 @@ fn all_negative(s: Vec3) -> bool {
     s.x < 0.0 && s.y < 0.0 && s.z < 0.0
 }
 
-/// Offset from `light` of the vertex at index slot `slot`, in view space. (A function, not a
-/// closure over the buffers: rust-gpu rejects closures that capture storage-buffer slices.)
+/// Offset from `light` of the vertex at index slot `slot`, in the cube's axes `frame`. (A
+/// function, not a closure over the buffers: rust-gpu rejects closures that capture
+/// storage-buffer slices.)
 #[inline]
-pub(crate) fn corner_offset(positions: &[f32], indices: &[u32], slot: usize, view: Mat4, light: Vec3) -> Vec3 {
+fn corner_offset(positions: &[f32], indices: &[u32], slot: usize, view: Mat4, light: Vec3, frame: &CubeFrame) -> Vec3 {
     let i = 3 * indices[slot] as usize;
-    (view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate() - light
+    frame.local((view * Vec4::new(positions[i], positions[i + 1], positions[i + 2], 1.0)).truncate() - light)
+}
+
+/// The corners of the triangle whose indices start at slot `first` as offsets from caster `c`
+/// (its record in `casters`), in its cube's axes ([`CubeFrame::of_caster`]): what the cull, the
+/// draw and the compute raster place on its faces.
+#[inline]
+pub(crate) fn triangle_offsets(positions: &[f32], indices: &[u32], first: usize, view: Mat4, casters: &[f32], c: u32) -> (Vec3, Vec3, Vec3) {
+    let k = (c * crate::shadow::CASTER_WORDS) as usize;
+    let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
+    let frame = CubeFrame::of_caster(casters, c);
+    (corner_offset(positions, indices, first, view, light, &frame), corner_offset(positions, indices, first + 1, view, light, &frame), corner_offset(positions, indices, first + 2, view, light, &frame))
 }
 
 /// The plane-distance test's radius is widened by this factor (rounding of the cross product).
@@ -204,10 +250,9 @@ pub fn batch_vertex(v: u32, positions: &[f32], indices: &[u32], view: Mat4, cast
         // Past the batch's last triangle.
         return behind;
     }
-    let light = Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
     let radius = casters[c + 3];
     let first = (batches[w + 4] + k - k % 3) as usize;
-    let (d0, d1, d2) = (corner_offset(positions, indices, first, view, light), corner_offset(positions, indices, first + 1, view, light), corner_offset(positions, indices, first + 2, view, light));
+    let (d0, d1, d2) = triangle_offsets(positions, indices, first, view, casters, map / FACES);
     if triangle_outside(d0, d1, d2, map % FACES, radius) {
         return behind;
     }
@@ -231,9 +276,9 @@ pub fn shadow_cull(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] casters: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 3)] entries: &mut [u32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 4)] args: &mut [u32],
-    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] needed: &[u32],
+    #[spirv(storage_buffer, descriptor_set = 0, binding = 5)] slots: &[u32],
 ) {
-    cull_batch(id.x, id.y, p, Mat4::from_cols_array_2d(&camera.view), batches, casters, needed, entries, &mut args[ARGS_COUNTED]);
+    cull_batch(id.x, id.y, p, Mat4::from_cols_array_2d(&camera.view), batches, casters, slots, entries, &mut args[ARGS_COUNTED]);
 }
 
 /// Step 2: one invocation.
@@ -280,7 +325,7 @@ pub mod handles {
     use crate::kernels::{Kernel, RasterKernel};
     use crate::shadow::ShadowParams;
 
-    /// Step 1: camera, batches, caster records, entries, arguments, faces with receivers.
+    /// Step 1: camera, batches, caster records, entries, arguments, slots (the face table).
     pub const SHADOW_CULL: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_cull", 6, [super::CULL_WORKGROUP, 1, 1], false);
     /// Step 2: arguments.
     pub const SHADOW_DRAW_ARGS: Kernel<ShadowCullParams> = Kernel::new("shadow_cull::shadow_draw_args", 1, [1, 1, 1], false);

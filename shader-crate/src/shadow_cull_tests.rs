@@ -1,5 +1,5 @@
 use super::*;
-use crate::shadow::{cube_face, CASTER_WORDS, NO_CONE};
+use crate::shadow::{cube_face, CASTER_WORDS, NO_CONE, SHADOW_HEADER_WORDS};
 use crate::test_support::Rng;
 
 /// The batch words (`BATCH_WORDS` each) of `n_tris` triangles stored corner after corner in
@@ -91,21 +91,38 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
     // A rotation as the camera's view.
     let view = Mat4::from_rotation_y(0.7) * Mat4::from_rotation_x(-0.3);
     let lights: Vec<(Vec3, f32)> = (0..6).map(|_| (Vec3::new(range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0), range(&mut rng, -8.0, 8.0)), range(&mut rng, 2.0, 7.0))).collect();
-    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r, 0.0, 0.0, 0.0, NO_CONE]).collect();
+    // Every other caster a spot light (cones of 20° to 80°, about random axes): its cube is
+    // turned to its cone (`CubeFrame`), the cull's faces and the draw's with it.
+    let cones: Vec<(Vec3, f32)> = (0..lights.len())
+        .map(|l| match l % 2 {
+            0 => (Vec3::ZERO, NO_CONE),
+            _ => (random_in_ball(&mut rng, 1.0).normalize_or(Vec3::Y), range(&mut rng, 20.0, 80.0).to_radians().cos()),
+        })
+        .collect();
+    let casters: Vec<f32> = lights.iter().zip(&cones).flat_map(|((p, r), (a, c))| [p.x, p.y, p.z, *r, a.x, a.y, a.z, *c]).collect();
     assert_eq!(casters.len() as u32, CASTER_WORDS * lights.len() as u32);
-    let run = |capacity: u32| {
+    // The face table: every face of 7 casters (one past the last) at 64² texels.
+    const SIDE: u32 = 64;
+    let slots: Vec<u32> = [vec![SIDE, 0, SHADOW_HEADER_WORDS, 0], (0..7 * FACES).flat_map(|m| [m * SIDE * SIDE, SIDE]).collect()].concat();
+    let run_with = |capacity: u32, casters: &[f32]| {
         let p = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity, pad: 0 };
         let mut entries = vec![u32::MAX; (ENTRY_WORDS * capacity) as usize];
         let mut args = [0u32; ARGS_WORDS as usize];
         for c in 0..p.casters + 1 {
             for b in 0..n_batches + 3 {
-                cull_batch(b, c, &p, view, &batches, &casters, &[1; 7 * FACES as usize], &mut entries, &mut args[ARGS_COUNTED]);
+                cull_batch(b, c, &p, view, &batches, casters, &slots, &mut entries, &mut args[ARGS_COUNTED]);
             }
         }
         draw_args(&mut args, capacity);
         (entries, args)
     };
+    let run = |capacity: u32| run_with(capacity, &casters);
     let (entries, args) = run(10_000);
+    // The same lights without cones send batches to more faces: the cone cull drops those
+    // outside the spot lights' cones.
+    let points: Vec<f32> = casters.chunks(CASTER_WORDS as usize).flat_map(|r| [r[0], r[1], r[2], r[3], 0.0, 0.0, 0.0, NO_CONE]).collect();
+    let uncut = run_with(10_000, &points).1[ARGS_COUNTED];
+    assert!(args[ARGS_COUNTED] < uncut, "{} entries with cones, {uncut} without", args[ARGS_COUNTED]);
     let counted = args[ARGS_COUNTED];
     assert!(counted > 10 && counted < 6 * n_batches * lights.len() as u32, "{counted} entries");
     assert_eq!(args[..4], [counted * 3 * BATCH_TRIANGLES, 1, 0, 0]);
@@ -142,9 +159,12 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
         for (l, &(light, radius)) in lights.iter().enumerate() {
             for k in 0..3 {
                 let d = (view * crate::raster::fetch3(&positions, (3 * t + k) as usize).extend(1.0)).truncate() - light;
-                if d.length() <= radius {
+                // A spot light needs the corners inside its cone (a lookup outside it finds no
+                // light to shadow).
+                let in_cone = cones[l].1 < -1.0 || d.normalize().dot(cones[l].0) >= cones[l].1;
+                if d.length() <= radius && in_cone {
                     seen += 1;
-                    let map = l as u32 * FACES + cube_face(d);
+                    let map = l as u32 * FACES + cube_face(crate::shadow::CubeFrame::of_cone(cones[l].0, cones[l].1).local(d));
                     assert!(drawn.contains(&(t, map)), "triangle {t} corner {k} seen by face {map} is not drawn there");
                 }
             }

@@ -41,7 +41,7 @@
 //! **Memory:** [`QUEUE_WORDS`] words of workgroup memory; no buffer of its own.
 use crate::coop::{Coop, SharedU32};
 use crate::shadow::{face_axes, face_entry, CASTER_WORDS, FACES};
-use crate::shadow_cull::{corner_offset, triangle_outside, ARGS_COUNTED, BATCH_TRIANGLES, BATCH_WORDS, ENTRY_WORDS};
+use crate::shadow_cull::{triangle_offsets, triangle_outside, ARGS_COUNTED, BATCH_TRIANGLES, BATCH_WORDS, ENTRY_WORDS};
 use glam::{Mat4, Vec3};
 #[cfg(feature = "compute")]
 use spirv_std::spirv;
@@ -371,11 +371,9 @@ fn entry_triangle(k: u32, b: u32, map: u32, res: u32, view: Mat4, positions: &[f
     if k >= batches[w + 5] {
         return FaceTriangle::NONE;
     }
-    let c = (map / FACES * CASTER_WORDS) as usize;
-    let light = Vec3::new(casters[c], casters[c + 1], casters[c + 2]);
     let first = (batches[w + 4] + 3 * k) as usize;
-    let (d0, d1, d2) = (corner_offset(positions, indices, first, view, light), corner_offset(positions, indices, first + 1, view, light), corner_offset(positions, indices, first + 2, view, light));
-    face_triangle(d0, d1, d2, map % FACES, res, casters[c + 3])
+    let (d0, d1, d2) = triangle_offsets(positions, indices, first, view, casters, map / FACES);
+    face_triangle(d0, d1, d2, map % FACES, res, casters[(map / FACES * CASTER_WORDS + 3) as usize])
 }
 
 /// Steps 1–3 for entry `e` (workgroup-uniform; past the written entries the workgroup returns).

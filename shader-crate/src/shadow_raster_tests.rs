@@ -181,19 +181,13 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     let batches = batch_words(&positions, n_tris);
     let view = Mat4::from_rotation_z(0.4) * Mat4::from_rotation_x(1.1);
     let lights: Vec<(Vec3, f32)> = (0..4).map(|_| (random_vec(&mut rng, 3.0), range(&mut rng, 3.0, 9.0))).collect();
-    let casters: Vec<f32> = lights.iter().flat_map(|(p, r)| [p.x, p.y, p.z, *r, 0.0, 0.0, 0.0, crate::shadow::NO_CONE]).collect();
-    let cull = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity: 1000, pad: 0 };
-    let mut entries = vec![0u32; (ENTRY_WORDS * cull.capacity) as usize];
-    let mut args = [0u32; ARGS_WORDS as usize];
-    for c in 0..cull.casters {
-        for b in 0..n_batches {
-            cull_batch(b, c, &cull, view, &batches, &casters, &[1; 4 * FACES as usize], &mut entries, &mut args[ARGS_COUNTED]);
-        }
-    }
-    draw_args(&mut args, cull.capacity);
-    let written = args[ARGS_COUNTED];
-    let d = ARGS_DISPATCH as usize;
-    assert!(written > 10 && args[d] * args[d + 1] >= written && args[d + 2] == 1, "{written} entries, dispatch {:?}", &args[d..d + 3]);
+    // Casters 1 and 3 spot lights (their cubes turned to cones of 30° and 60°).
+    let cone = |l: usize| match l {
+        1 => (Vec3::new(0.2, -1.0, 0.3).normalize(), 30.0f32.to_radians().cos()),
+        3 => (Vec3::new(-0.7, 0.1, 0.7).normalize(), 60.0f32.to_radians().cos()),
+        _ => (Vec3::ZERO, crate::shadow::NO_CONE),
+    };
+    let casters: Vec<f32> = lights.iter().enumerate().flat_map(|(l, (p, r))| [p.x, p.y, p.z, *r, cone(l).0.x, cone(l).0.y, cone(l).0.z, cone(l).1]).collect();
     // The face table: sides from 5 to 40 texels, the faces one after another in the atlas.
     let maps_n = lights.len() as u32 * FACES;
     let mut slots = vec![40, 0, SHADOW_HEADER_WORDS, 0];
@@ -204,6 +198,18 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
         texels += side * side;
     }
     let texels = texels as usize;
+    let cull = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity: 1000, pad: 0 };
+    let mut entries = vec![0u32; (ENTRY_WORDS * cull.capacity) as usize];
+    let mut args = [0u32; ARGS_WORDS as usize];
+    for c in 0..cull.casters {
+        for b in 0..n_batches {
+            cull_batch(b, c, &cull, view, &batches, &casters, &slots, &mut entries, &mut args[ARGS_COUNTED]);
+        }
+    }
+    draw_args(&mut args, cull.capacity);
+    let written = args[ARGS_COUNTED];
+    let d = ARGS_DISPATCH as usize;
+    assert!(written > 10 && args[d] * args[d + 1] >= written && args[d + 2] == 1, "{written} entries, dispatch {:?}", &args[d..d + 3]);
     // Reference: each entry's triangles over every texel of their face.
     let mut want = vec![NO_OCCLUDER; texels];
     let (mut large, mut small) = (0, 0);
@@ -253,5 +259,71 @@ fn texel_rays_are_the_lookups_texels() {
                 assert_eq!((tx as u32, ty as u32), (x, y), "res {res} face {f}");
             }
         }
+    }
+}
+
+/// A spot light's turned cube (`shadow::CubeFrame`) is the same for the raster and the lookup:
+/// a square across the cone, drawn through the caster's record (`entry_triangle`) into every
+/// face, shadows exactly the receivers whose ray from the light crosses it (an exact test in
+/// 64-bit floats; receivers within two texels' angle of the square's edges are left out), for a
+/// cone centred on a face (30°) and one centred on a corner (55°). The same maps looked up
+/// through view space's axes instead get many wrong, so the frame is what makes them agree.
+#[test]
+fn a_turned_cube_draws_and_looks_up_the_same_shadows() {
+    use crate::shadow::{cube_visibility, CubeFrame, SHADOW_FILTER_NEAREST};
+    const RES: u32 = 64;
+    let light = Vec3::new(1.0, 4.0, -2.0);
+    let axis = Vec3::new(0.3, -1.0, 0.2).normalize();
+    let (t, s) = (axis.any_orthonormal_vector(), axis.cross(axis.any_orthonormal_vector()));
+    // The square, 1.5 from the light across the axis, half-side H (about 17° off the axis).
+    const H: f32 = 0.45;
+    let centre = light + axis * 1.5;
+    let corners = [centre - H * t - H * s, centre + H * t - H * s, centre + H * t + H * s, centre - H * t + H * s];
+    let tris = [[corners[0], corners[1], corners[2]], [corners[0], corners[2], corners[3]]];
+    let positions: Vec<f32> = tris.iter().flatten().flat_map(|v| v.to_array()).collect();
+    let indices: Vec<u32> = (0..6).collect();
+    let batches = batch_words(&positions, 2);
+    let slots: Vec<u32> = [vec![RES, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS + 1, 0, 0], (0..FACES).flat_map(|f| [f * RES * RES, RES]).collect()].concat();
+    for outer_deg in [30.0f32, 55.0] {
+        let cos_outer = outer_deg.to_radians().cos();
+        let casters = [light.x, light.y, light.z, 10.0, axis.x, axis.y, axis.z, cos_outer];
+        let mut maps = vec![NO_OCCLUDER; (FACES * RES * RES) as usize];
+        for f in 0..FACES {
+            for k in 0..2 {
+                let tri = entry_triangle(k, 0, f, RES, Mat4::IDENTITY, &positions, &indices, &casters, &batches);
+                let whole = FaceTriangle { lo_x: 0, lo_y: 0, hi_x: RES - 1, hi_y: RES - 1, ..tri };
+                raster_texels(&whole, 0, 1, f * RES * RES, RES, &mut maps[..]);
+            }
+        }
+        let frame = CubeFrame::of_cone(axis, cos_outer);
+        let mut rng = Rng(0xc0de);
+        let (mut checked, mut shadowed, mut wrong_in_view_axes) = (0, 0, 0);
+        for _ in 0..8000 {
+            let dir = (axis + random_vec(&mut rng, 0.7)).normalize();
+            if dir.dot(axis) < cos_outer {
+                continue;
+            }
+            let p = light + dir * 3.0;
+            // The ray's crossing of the square's plane, in the square's axes (64-bit floats).
+            let (d, a, tt, ss) = (dir.as_dvec3(), axis.as_dvec3(), t.as_dvec3(), s.as_dvec3());
+            let hit = d * (1.5 / d.dot(a));
+            let (u, v) = (hit.dot(tt).abs(), hit.dot(ss).abs());
+            // Two texels' angle at the square's distance, at a face's centre (corner texels are
+            // smaller): 2 · 2 · 1.5 / RES, widened for the plane's obliquity.
+            let band = 4.0 * 1.5 / RES as f64 * 1.5;
+            let h = H as f64;
+            if (u - h).abs() < band || (v - h).abs() < band {
+                continue;
+            }
+            let inside = u < h && v < h;
+            let n = -dir;
+            let lit = cube_visibility(&maps, &slots, 0, SHADOW_FILTER_NEAREST, light, &frame, p, n);
+            assert_eq!(lit, if inside { 0.0 } else { 1.0 }, "{outer_deg}°: receiver along {dir:?} (square at ({u:.3}, {v:.3}))");
+            checked += 1;
+            shadowed += inside as u32;
+            wrong_in_view_axes += (cube_visibility(&maps, &slots, 0, SHADOW_FILTER_NEAREST, light, &CubeFrame::VIEW, p, n) != lit) as u32;
+        }
+        assert!(checked > 1000 && shadowed > 200 && checked - shadowed > 100, "{outer_deg}°: {checked} receivers, {shadowed} shadowed");
+        assert!(wrong_in_view_axes > checked / 10, "{outer_deg}°: view space's axes got only {wrong_in_view_axes} of {checked} wrong");
     }
 }

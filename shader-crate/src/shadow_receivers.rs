@@ -14,7 +14,8 @@
 //!    lookup's normal offset ([`lookup_reach`]), through `shadow_cull::face_mask` against the
 //!    caster (none where it lies outside a spot light's cone, [`sphere_meets_cone`], and only
 //!    the faces the cone, widened by the lookup's offset, meets, [`spot_faces`]: a spot light
-//!    takes only faces its cone lights); each face met keeps the largest resolution level its
+//!    takes only faces its cone lights, and its cube is turned to its cone,
+//!    `shadow::CubeFrame`: one face for a cone of at most 42°, three up to 70°); each face met keeps the largest resolution level its
 //!    receivers ask
 //!    (`shadow_atlas::receiver_level`) in its word of `needed` (an atomic maximum; 0: none).
 //!
@@ -25,7 +26,7 @@
 //!
 //! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 4 B per caster face.
 use crate::layout::ClusterGrid;
-use crate::shadow::{CASTER_WORDS, FACES, NORMAL_OFFSET_TEXELS};
+use crate::shadow::{CubeFrame, CASTER_WORDS, CONE_MARGIN, FACES, NORMAL_OFFSET_TEXELS};
 use crate::shadow_atlas::{face_side, receiver_level};
 use crate::shadow_cull::{face_mask, CULL_MARGIN};
 use glam::Vec3;
@@ -143,6 +144,8 @@ pub fn packed_level(levels: u32, f: u32) -> u32 {
 pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], casters: &[f32]) -> u32 {
     let k = (c * CASTER_WORDS) as usize;
     let (light, radius) = (Vec3::new(casters[k], casters[k + 1], casters[k + 2]), casters[k + 3]);
+    let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
+    let frame = CubeFrame::of_cone(axis, cos_outer);
     let n = p.tiles_x * p.tiles_y;
     let end = if first + TILES_PER_INVOCATION < n { first + TILES_PER_INVOCATION } else { n };
     let mut levels = 0;
@@ -157,9 +160,13 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
             let far = d.length() + r;
             let g = &p.grid;
             let level = receiver_level(centre, r, light, g.near, g.height, g.tan_half_fov_y, p.res);
-            let widened = r + lookup_reach(far, face_side(level, 0, p.res));
-            let axis = Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]);
-            let mask = if sphere_meets_cone(d, widened, axis, casters[k + 7]) { face_mask(d, widened, radius + CULL_MARGIN * far) & spot_faces(d, r, widened - r, axis, casters[k + 7]) } else { 0 };
+            let side = face_side(level, 0, p.res);
+            let widened = r + lookup_reach(far, side);
+            let mask = if sphere_meets_cone(d, widened, axis, cos_outer) {
+                face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & spot_faces(side, frame.local(axis), cos_outer)
+            } else {
+                0
+            };
             let mut f = 0;
             while f < FACES {
                 if mask & (1 << f) != 0 && packed_level(levels, f) < level {
@@ -192,19 +199,22 @@ pub fn sphere_meets_cone(d: Vec3, r: f32, axis: Vec3, cos_outer: f32) -> bool {
     a <= outer + spread + CONE_MARGIN
 }
 
-/// The faces a receiver sphere (offset `d` from a spot light, radius `r`) may look up through the
-/// cone of unit `axis` and outer half-angle `acos(cos_outer)`: every face for a point light or a
-/// sphere within `reach` of the light, else [`cone_faces`] of the cone widened by the angle a
-/// lookup's offset of at most `reach` turns a direction seen from at least `|d| − r` away. A
-/// point of the sphere the spot lights lies inside the cone; its lookup direction within that
-/// angle of it, so on one of these faces.
+/// The faces a receiver of a tile whose faces take `side` texels may look up through the cone of
+/// unit `axis` (in the light's cube axes, `shadow::CubeFrame::local`) and outer half-angle
+/// `acos(cos_outer)`: every face for a point light, else [`cone_faces`] of the cone widened by
+/// the angle the lookup's normal offset turns a direction. The offset is
+/// [`NORMAL_OFFSET_TEXELS`] texels of `2ρ / side` at the receiver's distance `ρ` from the light
+/// (`shadow::cube_visibility`, its own face having at least this side), so it turns the
+/// direction by at most `asin(NORMAL_OFFSET_TEXELS · 2 / side)` whatever `ρ`. A point the spot
+/// lights lies inside the cone; its lookup direction within that angle of it, so on one of
+/// these faces.
 #[inline]
-pub fn spot_faces(d: Vec3, r: f32, reach: f32, axis: Vec3, cos_outer: f32) -> u32 {
-    let near = d.length() - r;
-    if !(cos_outer >= -1.0) || !(near > reach) {
+pub fn spot_faces(side: u32, axis: Vec3, cos_outer: f32) -> u32 {
+    if !(cos_outer >= -1.0) {
         return (1 << FACES) - 1;
     }
-    let widen = (reach / near).asin();
+    let s = NORMAL_OFFSET_TEXELS * 2.0 / side as f32;
+    let widen = if s < 1.0 { s.asin() } else { core::f32::consts::PI };
     cone_faces(axis, clamp_unit(cos_outer).acos() + widen + CONE_MARGIN)
 }
 
@@ -260,8 +270,6 @@ pub fn pyramid_cos(a: Vec3) -> f32 {
     best
 }
 
-/// The cone test's margin in radians.
-pub const CONE_MARGIN: f32 = 1e-3;
 
 /// `x` within `[−1, 1]`.
 #[inline]

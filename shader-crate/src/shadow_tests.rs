@@ -126,7 +126,7 @@ fn a_square_shadows_exactly_its_projection_on_a_floor() {
         for i in 0..=160 {
             for k in 0..=160 {
                 let p = Vec3::new(-8.0 + 0.1 * i as f32, 0.0, -8.0 + 0.1 * k as f32);
-                let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, p, up);
+                let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, &CubeFrame::VIEW, p, up);
                 // The edge band: texels of the occluder's edge seen from the light, plus the
                 // bias rule's offset (module docs), both a few texels at the floor.
                 let texel = 2.0 * (light - p).length() / RES as f32;
@@ -169,7 +169,7 @@ fn tilted_planes_do_not_shadow_themselves() {
             }
         });
         for filter in [SHADOW_FILTER_NEAREST, SHADOW_FILTER_BILINEAR] {
-            let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, p, n);
+            let v = cube_visibility(&map, &uniform_slots(RES, filter, &[0]), 0, filter, light, &CubeFrame::VIEW, p, n);
             assert_eq!(v, 1.0, "a plane {:.0}° from the light at distance {:.2} shadows itself (filter {filter})", angle.to_degrees(), (light - p).length());
         }
     }
@@ -182,9 +182,9 @@ fn lights_without_a_slot_and_no_shadows_reach_everything() {
     let maps = vec![0f32.to_bits(); (FACES * 16 * 16) as usize];
     let s = CubeShadows { slots: &slots, maps: &maps };
     let (light, p, n) = (Vec3::ZERO, Vec3::new(0.0, -2.0, 0.0), Vec3::Y);
-    assert_eq!(s.visibility(0, light, p, n), 1.0, "light 0 casts no shadow");
-    assert_eq!(s.visibility(1, light, p, n), 0.0, "light 1's map occludes");
-    assert_eq!(NoShadows.visibility(1, light, p, n), 1.0);
+    assert_eq!(s.visibility(0, light, &CubeFrame::VIEW, p, n), 1.0, "light 0 casts no shadow");
+    assert_eq!(s.visibility(1, light, &CubeFrame::VIEW, p, n), 0.0, "light 1's map occludes");
+    assert_eq!(NoShadows.visibility(1, light, &CubeFrame::VIEW, p, n), 1.0);
 }
 
 /// The bilinear filter weighs the four texels around the lookup: half-way across a shadow edge
@@ -205,7 +205,7 @@ fn the_bilinear_filter_blends_across_an_edge() {
     let mut partial = 0;
     for i in 0..=200 {
         let p = Vec3::new(-0.5 + 0.005 * i as f32, 0.0, 0.3);
-        let v = cube_visibility(&map, &uniform_slots(RES, SHADOW_FILTER_BILINEAR, &[0]), 0, SHADOW_FILTER_BILINEAR, light, p, Vec3::Y);
+        let v = cube_visibility(&map, &uniform_slots(RES, SHADOW_FILTER_BILINEAR, &[0]), 0, SHADOW_FILTER_BILINEAR, light, &CubeFrame::VIEW, p, Vec3::Y);
         assert!(v >= last - 1e-6, "visibility falls from {last} to {v} at {p}");
         partial += usize::from(v > 0.0 && v < 1.0);
         last = v;
@@ -233,10 +233,10 @@ fn faces_of_different_sides_look_up_their_own_texels() {
     let mut rng = Rng(3);
     for _ in 0..2_000 {
         let p = Vec3::new(range(&mut rng, -4.0, 4.0), 0.0, range(&mut rng, -4.0, 4.0));
-        let got = cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, p, Vec3::Y);
+        let got = cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, &CubeFrame::VIEW, p, Vec3::Y);
         let at = cube_face(p - light);
         let side = sides[at as usize];
-        let want = cube_visibility(&cube_map_of(light, side, &hit), &uniform_slots(side, SHADOW_FILTER_NEAREST, &[0]), 0, SHADOW_FILTER_NEAREST, light, p, Vec3::Y);
+        let want = cube_visibility(&cube_map_of(light, side, &hit), &uniform_slots(side, SHADOW_FILTER_NEAREST, &[0]), 0, SHADOW_FILTER_NEAREST, light, &CubeFrame::VIEW, p, Vec3::Y);
         // Near a seam the offset may cross into a face of another side: skip those points.
         let texel = 2.0 * (light - p).length() / side as f32;
         if cube_face(p + Vec3::Y * (NORMAL_OFFSET_TEXELS * texel) - light) == at {
@@ -247,6 +247,40 @@ fn faces_of_different_sides_look_up_their_own_texels() {
     let mut bare = slots.clone();
     let w = (SHADOW_HEADER_WORDS + 1 + 3 * FACE_WORDS) as usize;
     bare[w + 1] = 0;
-    assert_eq!(cube_visibility(&atlas, &bare, 0, SHADOW_FILTER_NEAREST, light, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 1.0);
-    assert_eq!(cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 0.0, "under the square");
+    assert_eq!(cube_visibility(&atlas, &bare, 0, SHADOW_FILTER_NEAREST, light, &CubeFrame::VIEW, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 1.0);
+    assert_eq!(cube_visibility(&atlas, &slots, 0, SHADOW_FILTER_NEAREST, light, &CubeFrame::VIEW, Vec3::new(0.1, 0.0, 0.1), Vec3::Y), 0.0, "under the square");
+}
+
+/// A spot light's cube frame: orthonormal and right-handed for axes all over the sphere (the
+/// poles and the basis's seam at `z = 0` included); a cone of at most 42° about the centre of
+/// face 4, which alone holds it widened up to 45° (`shadow_receivers::cone_faces`); a wider one
+/// about the corner `(1, 1, 1)/√3`, whose three faces hold it up to `acos(1/3)` ≈ 70.5°; a point light keeps view
+/// space's axes.
+#[test]
+fn a_spot_lights_cube_is_turned_to_its_cone() {
+    use crate::shadow_receivers::cone_faces;
+    let corner = Vec3::ONE / 3.0f32.sqrt();
+    let mut rng = Rng(0x5eed_f4ce);
+    let mut axes: Vec<Vec3> = (0..2000).map(|_| Vec3::new(range(&mut rng, -1.0, 1.0), range(&mut rng, -1.0, 1.0), range(&mut rng, -1.0, 1.0))).filter(|v| v.length() > 0.1).map(Vec3::normalize).collect();
+    axes.extend([Vec3::Z, -Vec3::Z, Vec3::X, -Vec3::Y, Vec3::new(0.6, 0.8, 0.0), Vec3::new(0.0, 0.0, -1.0 + 1e-7).normalize()]);
+    for axis in axes {
+        for (outer_deg, centre, faces) in [(20.0f32, Vec3::Z, 1u32 << 4), (42.0, Vec3::Z, 1 << 4), (43.0, corner, 0b01_0101), (60.0, corner, 0b01_0101)] {
+            let outer = outer_deg.to_radians();
+            let f = CubeFrame::of_cone(axis, outer.cos());
+            for (a, b) in [(f.x, f.y), (f.y, f.z), (f.x, f.z)] {
+                assert!(a.dot(b).abs() < 1e-5, "{axis:?}: rows not orthogonal");
+            }
+            for r in [f.x, f.y, f.z] {
+                assert!((r.length() - 1.0).abs() < 1e-5, "{axis:?}: a row of length {}", r.length());
+            }
+            assert!((f.x.cross(f.y) - f.z).length() < 1e-5, "{axis:?}: left-handed");
+            let local = f.local(axis);
+            assert!((local - centre).length() < 1e-5, "{axis:?} at {outer_deg}°: the axis lands at {local:?}");
+            // Widened to just short of what the faces hold: 45° for one face, acos(1/3) for three.
+            let widened = if outer_deg <= 42.0 { 44.9f32.to_radians() } else { (1.0f32 / 3.0).acos() - 1e-3 };
+            assert_eq!(cone_faces(local, widened), faces, "{axis:?}, {outer_deg}° widened to {}°", widened.to_degrees());
+        }
+    }
+    assert_eq!(CubeFrame::of_cone(Vec3::ZERO, NO_CONE), CubeFrame::VIEW);
+    assert_eq!(CubeFrame::of_cone(Vec3::new(0.0, 0.0, -1.0), crate::light_types::POINT_MARKER), CubeFrame::VIEW, "the light buffer's point marker");
 }

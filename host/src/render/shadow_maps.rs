@@ -36,7 +36,7 @@ use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
 use shaders::shadow_raster::ShadowRasterParams;
-use shaders::shadow::{caster_record, ShadowParams, CASTER_WORDS, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
+use shaders::shadow::{caster_record, CubeFrame, ShadowParams, CASTER_WORDS, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
 use shaders::shadow_atlas::{cap_level, handles as atlas_handles, AtlasParams, ARGS_SHIFT, ARGS_USED, MIN_SIDE};
 use shaders::layout::ClusterGrid;
 use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
@@ -372,7 +372,7 @@ impl ShadowMaps {
         rec.dispatch_linear(&self.alloc_pipe, &[&self.needed, &self.args, &self.slots], &atlas, atlas.faces)?;
         let batches = self.spheres.len() as u32;
         let p = ShadowCullParams { batches, casters, capacity: self.capacity, pad: 0 };
-        rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args, &self.needed], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
+        rec.dispatch(&self.cull, &[camera, &self.batches, &self.records, &self.entries, &self.args, &self.slots], &p, [batches.div_ceil(CULL_WORKGROUP), p.casters, 1])?;
         rec.dispatch(&self.args_pipe, &[&self.args], &p, [1, 1, 1])?;
         match &self.writer {
             Writer::Compute(raster) => {
@@ -458,7 +458,8 @@ fn batches(positions: &[[f32; 3]], order: &[u32]) -> (Vec<u32>, Vec<[f32; 4]>) {
     (words, spheres)
 }
 
-/// The entries the cull can write for these casters: [`face_mask`] on each batch's sphere
+/// The entries the cull can write for these casters: [`face_mask`] on each batch's sphere (in
+/// the caster's cube axes)
 /// widened by `CULL_MARGIN` of its distance and both radii, so that the GPU's unwidened test in
 /// its own rounding never finds more.
 pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; CASTER_WORDS as usize]]) -> u64 {
@@ -467,10 +468,11 @@ pub fn count_entries(spheres: &[[f32; 4]], rotation: Mat4, records: &[[f32; CAST
         let mut n = 0u64;
         for rec in records {
             let (light, radius) = (Vec3::new(rec[0], rec[1], rec[2]), rec[3]);
+            let frame = CubeFrame::of_cone(Vec3::new(rec[4], rec[5], rec[6]), rec[7]);
             for &(c, r) in &view {
                 let d = c - light;
                 let widened = r + CULL_MARGIN * (d.length() + r + radius);
-                n += face_mask(d, widened, radius).count_ones() as u64;
+                n += face_mask(frame.local(d), widened, radius).count_ones() as u64;
             }
         }
         n

@@ -355,6 +355,15 @@ impl Scene {
         }
     }
 
+    /// Stores the point lights in the Morton order of their positions ([`lights::spatial_order`]),
+    /// each with its cone and its shadow flag: the same lights, only their indices change.
+    pub fn order_lights_spatially(&mut self) {
+        let order = lights::spatial_order(&self.lights);
+        self.lights = lights::permuted(&self.lights, &order);
+        self.spots = lights::permuted(&self.spots, &order);
+        self.shadows = lights::permuted(&self.shadows, &order);
+    }
+
     /// Makes light `i` of `lights` cast shadows (or not).
     pub fn set_casts_shadows(&mut self, i: usize, casts: bool) {
         if casts && self.shadows.is_empty() {

@@ -483,3 +483,42 @@ fn descriptions_with_shadow_casting_lights() {
     }
     assert!(lights::shadow_casters(3, 1.5).is_err());
 }
+
+/// `--light-order spatial`: a permutation of the lights whose Morton codes (interleaved here bit
+/// by bit, not by the shader crate's spreading) never decrease, ties in the given order, each
+/// light keeping its cone and shadow flag; consecutive lights end up far closer in space.
+#[test]
+fn spatial_order_follows_the_morton_curve_and_keeps_each_lights_flags() {
+    let mut s = Scene::load("city", &assets()).unwrap();
+    let mut ls = lights::uniform(&s, 5000, 3).unwrap();
+    ls[17] = ls[4000]; // an equal key: the tie keeps 17 before 4000
+    let cones = lights::spot_cones(ls.len(), 0.5, 3).unwrap();
+    s.add_lights(ls.iter().copied().zip(cones.iter().copied()));
+    for i in (0..ls.len()).step_by(7) {
+        s.set_casts_shadows(i, true);
+    }
+    let before = s.clone();
+    let order = lights::spatial_order(&s.lights);
+    let mut seen = vec![false; ls.len()];
+    order.iter().for_each(|&i| seen[i as usize] = true);
+    assert!(seen.iter().all(|&b| b) && order.len() == ls.len(), "a permutation");
+    let (lo, hi) = s.lights.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), l| (lo.min(l.position.into()), hi.max(l.position.into())));
+    let key = |p: [f32; 3]| {
+        let cell = |a: usize| (((p[a] - lo[a]) / (hi[a] - lo[a]) * 1024.0) as u32).min(1023);
+        (0..10).fold(0u32, |k, b| k | ((cell(0) >> b & 1) << (3 * b)) | ((cell(1) >> b & 1) << (3 * b + 1)) | ((cell(2) >> b & 1) << (3 * b + 2)))
+    };
+    let keys: Vec<u32> = order.iter().map(|&i| key(s.lights[i as usize].position)).collect();
+    let out_of_order = keys.windows(2).filter(|w| w[0] > w[1]).count();
+    // The shader crate quantises with a precomputed scale: a light on a cell boundary may land
+    // one cell over; a handful of the 5 000, never a systematic reversal.
+    assert!(out_of_order <= 5, "{out_of_order} lights out of Morton order");
+    let at = |i: u32| order.iter().position(|&o| o == i).unwrap();
+    assert!(at(17) + 1 == at(4000), "equal keys keep their given order");
+    s.order_lights_spatially();
+    for (k, &i) in order.iter().enumerate() {
+        let i = i as usize;
+        assert_eq!((s.lights[k], s.spots[k], s.shadows[k]), (before.lights[i], before.spots[i], before.shadows[i]), "light {k} (was {i})");
+    }
+    let step = |l: &[PointLight]| l.windows(2).map(|w| (Vec3::from(w[0].position) - Vec3::from(w[1].position)).length()).sum::<f32>();
+    assert!(step(&s.lights) * 5.0 < step(&before.lights), "consecutive lights closer: {} against {}", step(&s.lights), step(&before.lights));
+}

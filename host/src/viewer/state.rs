@@ -41,6 +41,8 @@ pub struct Viewer {
     shadows_on: bool,
     shadow_share: Option<f32>,
     seed: u64,
+    /// `--light-order`: lights generated anew (+ and −) are stored in it as well.
+    light_order: lights::LightOrder,
     pub settings: Settings,
     pub camera: FlyCamera,
     renderer: Option<Renderer>,
@@ -111,6 +113,9 @@ impl Viewer {
         let at = a.camera.unwrap_or_else(|| Bookmark { fov_y_degrees: None, ..Bookmark::of_camera(&scene_camera) });
         scene.camera = at.apply(&scene_camera);
         scene.validate().with_context(|| format!("scene {:?}", a.scene)).map_err(bad_input)?;
+        if a.light_order == lights::LightOrder::Spatial {
+            scene.order_lights_spatially();
+        }
         let base_lights = std::mem::take(&mut scene.lights);
         let flat = flatten(&scene, a.normal_precision).map_err(bad_input)?;
         let (lo, hi) = scene.bounds;
@@ -129,6 +134,7 @@ impl Viewer {
             spot_share,
             lights,
             seed: a.seed,
+            light_order: a.light_order,
             settings,
             camera: FlyCamera { at, speed },
             renderer: None,
@@ -248,6 +254,13 @@ impl Viewer {
         };
         preflight::check_lights(&gpu.ctx.info, self.settings.technique, self.settings.light_record, self.settings.tile_size, n as u64, &what)?;
         let base = lights::uniform(&self.scene, n, self.seed).with_context(|| format!("generating {what}"))?;
+        let (base, spots, casters) = match self.light_order {
+            lights::LightOrder::Spatial => {
+                let order = lights::spatial_order(&base);
+                (lights::permuted(&base, &order), lights::permuted(&spots, &order), lights::permuted(&casters, &order))
+            }
+            lights::LightOrder::Given => (base, spots, casters),
+        };
         let animated = lights::animate(&base, self.time);
         if casters.contains(&true) || self.scene.shadows.contains(&true) {
             // Shadow flags are per light: the renderer is made anew for the new count.
