@@ -316,3 +316,30 @@ fn compact_records_report_and_warn_how_far_lights_moved() {
     let warning: Vec<&str> = err.lines().filter(|l| l.starts_with("warning: compact light records move lights by up to")).collect();
     assert!(compact > 0.5 && warning.len() == 1, "compact records moved lights by {compact}:\n{err}");
 }
+
+/// `--light-order`: `spatial` (the default) and `given` render the city within 1/255 of each
+/// other, and the stats record which order stored the lights (`tests/render.rs` shows that the
+/// two orders list the lights under other indices).
+#[test]
+fn light_order_stores_the_lights_otherwise_with_the_same_image() {
+    let dir = TempDir::new("cli-light-order");
+    let frame = |order: Option<&str>| {
+        let (png, json) = (dir.join("city.png"), dir.join("city.json"));
+        let mut args = vec!["render", "--scene", "city", "--lights", "400", "--width", "96", "--height", "54", "--frames", "1", "--technique", "clustered-bvh"];
+        args.extend(["--stats", json.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+        if let Some(o) = order {
+            args.extend(["--light-order", o]);
+        }
+        let (ok, _, err) = manylights(&args);
+        assert!(ok, "render {order:?} failed:\n{err}");
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (stats["light_order"].as_str().unwrap().to_owned(), image::open(&png).unwrap().to_rgba8())
+    };
+    let (default, a) = frame(None);
+    let (given, b) = frame(Some("given"));
+    assert_eq!((default.as_str(), given.as_str()), ("spatial", "given"));
+    let worst = a.pixels().zip(b.pixels()).flat_map(|(p, q)| (0..4).map(move |c| p[c].abs_diff(q[c]))).max().unwrap();
+    assert!(worst <= 1, "the two orders differ by {worst}/255");
+    let lit = a.pixels().filter(|p| p[0] > 0 || p[1] > 0 || p[2] > 0).count();
+    assert!(lit * 4 > (a.width() * a.height()) as usize, "the city should be mostly lit: {lit} pixels");
+}

@@ -367,7 +367,8 @@ pub fn run(gpu: &Gpu, a: &RenderArgs) -> Result<()> {
         }
     }
     if let Some(path) = &a.stats {
-        let json = render::stats::stats_json(&gpu.ctx.info, &scene.name, scene.lights.len(), &settings, &frame);
+        let mut json = render::stats::stats_json(&gpu.ctx.info, &scene.name, scene.lights.len(), &settings, &frame);
+        json["light_order"] = serde_json::json!(a.light_order.name());
         std::fs::write(path, serde_json::to_string_pretty(&json)?).with_context(|| format!("writing {}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }

@@ -408,6 +408,16 @@ pub enum LightOrder {
     Spatial,
 }
 
+impl LightOrder {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Given => "given",
+            Self::Spatial => "spatial",
+        }
+    }
+}
+
 /// Radix digit of [`spatial_order`]'s host sort: three passes of 10 bits order the 30-bit keys.
 const SPATIAL_DIGIT_BITS: u32 = 10;
 
