@@ -34,7 +34,7 @@
 use crate::compact_light::light_at;
 use crate::layout::*;
 use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SHADOWS, EFFECT_SPOT};
-use crate::shadow::{CubeFrame, NoShadows, Shadowing, NO_CONE};
+use crate::shadow::{NoShadows, Shadowing, NO_CONE};
 use crate::{lighting, octahedral, reconstruct, spot};
 use spirv_std::glam::{UVec3, Vec3};
 
@@ -422,7 +422,7 @@ fn shade_range<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, ef
 #[inline]
 fn shade_one<const SPECULAR: bool, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight, shadows: &S) -> Vec3 {
     let radiance = lighting::shade_unit_normal::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
-    // The cone's axis and outer cosine also lay out the light's cube (`CubeFrame::of_cone`; a
+    // The cone's axis and outer cosine also lay out the light's cube (`shadow::CubeFrame`; a
     // point light's marker record and a frame without spots give view space's axes).
     let (radiance, axis, cos_outer) = if effects & EFFECT_SPOT != 0 {
         let cone = cone_of(lights, num_lights, l);
@@ -431,7 +431,7 @@ fn shade_one<const SPECULAR: bool, S: Shadowing>(s: &Surface, effects: u32, num_
         (radiance, Vec3::ZERO, NO_CONE)
     };
     if effects & EFFECT_SHADOWS != 0 && radiance.max_element() > 0.0 {
-        radiance * shadows.visibility(l, Vec3::from_array(light.position), &CubeFrame::of_cone(axis, cos_outer), s.pos, s.normal)
+        radiance * shadows.visibility(l, Vec3::from_array(light.position), axis, cos_outer, s.pos, s.normal)
     } else {
         radiance
     }

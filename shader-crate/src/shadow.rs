@@ -207,9 +207,10 @@ pub fn face_texel(d: Vec3, f: u32, res: u32) -> (f32, f32) {
 
 /// Where the shading reads shadows from.
 pub trait Shadowing {
-    /// The share of light `l` (at `light`, view space, its cube laid along `frame`) that reaches
-    /// `pos` with unit normal `normal`: 1 where nothing lies between, 0 in shadow.
-    fn visibility(&self, l: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32;
+    /// The share of light `l` (at `light`, view space; its cone's unit `axis` and outer cosine
+    /// `cos_outer`, [`NO_CONE`] for a point light, lay out its cube: [`CubeFrame::of_cone`])
+    /// that reaches `pos` with unit normal `normal`: 1 where nothing lies between, 0 in shadow.
+    fn visibility(&self, l: u32, light: Vec3, axis: Vec3, cos_outer: f32, pos: Vec3, normal: Vec3) -> f32;
 }
 
 /// Every light reaches every point (the kernels of scenes without shadow-casting lights).
@@ -217,7 +218,7 @@ pub struct NoShadows;
 
 impl Shadowing for NoShadows {
     #[inline]
-    fn visibility(&self, _l: u32, _light: Vec3, _frame: &CubeFrame, _pos: Vec3, _normal: Vec3) -> f32 {
+    fn visibility(&self, _l: u32, _light: Vec3, _axis: Vec3, _cos_outer: f32, _pos: Vec3, _normal: Vec3) -> f32 {
         1.0
     }
 }
@@ -232,12 +233,13 @@ pub struct CubeShadows<'a> {
 
 impl Shadowing for CubeShadows<'_> {
     #[inline]
-    fn visibility(&self, l: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32 {
+    fn visibility(&self, l: u32, light: Vec3, axis: Vec3, cos_outer: f32, pos: Vec3, normal: Vec3) -> f32 {
         let slot = self.slots[(SHADOW_HEADER_WORDS + l) as usize];
         if slot == NO_SHADOW {
             return 1.0;
         }
-        cube_visibility(self.maps, self.slots, slot, self.slots[1], light, frame, pos, normal)
+        // The frame only for a light that casts shadows (most lights of a list do not).
+        cube_visibility(self.maps, self.slots, slot, self.slots[1], light, &CubeFrame::of_cone(axis, cos_outer), pos, normal)
     }
 }
 

@@ -6,6 +6,7 @@
 //! light, sort scratch, ≈ 32/B B per light of nodes (32 B per B lights, plus the levels above).
 use super::sort::{LightSorter, SortKind};
 use crate::gpu::Gpu;
+use crate::scene::lights::position_bounds;
 use crate::vk::{Buffer, Recorder, VkResult};
 use shaders::layout::{BvhParams, LightSphere, MortonParams, PointLight};
 use shaders::light_bvh::{level_count, level_nodes, level_offset, total_nodes, valid_branching};
@@ -129,20 +130,6 @@ fn quantizers(lo: [f32; 3], hi: [f32; 3], count: u32, bits: u32) -> MortonParams
         q30.scale = q30.scale.map(|s| s * (1.0 - 1.0 / (1 << 20) as f32));
     }
     MortonParams { q30, q63: MortonQuantizer::new(lo, hi, MORTON63_BITS), count, _pad: [0; 3] }
-}
-
-fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
-    if lights.is_empty() {
-        return ([0.0; 3], [1.0; 3]);
-    }
-    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-    for l in lights {
-        for a in 0..3 {
-            lo[a] = lo[a].min(l.position[a]);
-            hi[a] = hi[a].max(l.position[a]);
-        }
-    }
-    (lo, hi)
 }
 
 /// The same BVH on the CPU, from the kernels' own functions run one after the other: Morton keys

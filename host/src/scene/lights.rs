@@ -418,6 +418,22 @@ impl LightOrder {
     }
 }
 
+/// The box of the lights' positions, `(min, max)` per axis (`[0; 3], [1; 3]` for no lights):
+/// what the Morton quantisers of [`spatial_order`] and the light BVH (`render::bvh`) span.
+pub fn position_bounds(lights: &[PointLight]) -> ([f32; 3], [f32; 3]) {
+    if lights.is_empty() {
+        return ([0.0; 3], [1.0; 3]);
+    }
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for l in lights {
+        for a in 0..3 {
+            lo[a] = lo[a].min(l.position[a]);
+            hi[a] = hi[a].max(l.position[a]);
+        }
+    }
+    (lo, hi)
+}
+
 /// Radix digit of [`spatial_order`]'s host sort: three passes of 10 bits order the 30-bit keys.
 const SPATIAL_DIGIT_BITS: u32 = 10;
 
@@ -433,13 +449,7 @@ const SPATIAL_DIGIT_BITS: u32 = 10;
 /// instead of a random page per light, and so do the shading's reads of a cluster's lights.
 pub fn spatial_order(lights: &[PointLight]) -> Vec<u32> {
     let n = lights.len();
-    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-    for l in lights {
-        for a in 0..3 {
-            lo[a] = lo[a].min(l.position[a]);
-            hi[a] = hi[a].max(l.position[a]);
-        }
-    }
+    let (lo, hi) = position_bounds(lights);
     let q = shaders::morton::MortonQuantizer::new(lo, hi, shaders::morton::MORTON30_BITS);
     // Key in the high word, index in the low one: the sort moves one u64 per light.
     let mut pairs: Vec<u64> = lights.iter().enumerate().map(|(i, l)| ((q.morton30_of(l.position) as u64) << 32) | i as u64).collect();
