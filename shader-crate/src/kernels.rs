@@ -336,8 +336,9 @@ pub const FORWARD_DEPTH_MS: [RasterKernel<ForwardParams>; 2] = [
     RasterKernel::new("raster_forward::depth_vs_uv", "raster_forward_ms::depth_fs_masked_ms", 0, 2),
 ];
 /// Storage buffers of the forward pass's fragment stage: the tile lists (heads and nodes, or
-/// ranges and indices), lights, materials, counters, winning draws.
-pub const FORWARD_FRAGMENT_BUFFERS: u32 = 6;
+/// ranges and indices), lights, materials, counters, winning draws, and the shadow slots and maps
+/// (`shadow::CubeShadows`).
+pub const FORWARD_FRAGMENT_BUFFERS: u32 = 8;
 /// Forward+ shading pass `[list layout][plain, textured, alpha-tested]` (layouts `[linked,
 /// array]` as [`FORWARD_PLUS_CULL`]; variants as [`GBUFFER`]).
 pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
@@ -352,9 +353,10 @@ pub const FORWARD_SHADE: [[RasterKernel<ForwardParams>; 3]; 2] = [
         RasterKernel::new("raster::gbuffer_vs_uv", "raster_forward::forward_fs_masked_array", FORWARD_FRAGMENT_BUFFERS, 2),
     ],
 ];
-/// Storage buffers of the multisampled forward pass's fragment stage: [`FORWARD_FRAGMENT_BUFFERS`]
-/// and the pre-pass's depth planes.
-pub const FORWARD_FRAGMENT_BUFFERS_MS: u32 = FORWARD_FRAGMENT_BUFFERS + 1;
+/// Storage buffers of the multisampled forward pass's fragment stage: the tile lists, lights,
+/// materials, counters, winning triangles and the pre-pass's depth planes (no shadow maps:
+/// shadows are shaded once per pixel, and `render` refuses them with `--msaa`).
+pub const FORWARD_FRAGMENT_BUFFERS_MS: u32 = 7;
 /// [`FORWARD_SHADE`] at `N` samples (`--msaa`, `forward_msaa.rs`).
 pub const FORWARD_SHADE_MS: [[RasterKernel<ForwardParams>; 3]; 2] = [
     [

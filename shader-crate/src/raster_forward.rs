@@ -17,6 +17,7 @@ use crate::octahedral::{self, Precision};
 use crate::raster::{clip_position, encode_gbuffer_normal, sample_draw_uniform, unorm8, Texture2d, ALPHA_CUTOFF};
 use crate::lighting;
 use crate::shading::{self, variant_entries, LightList, Surface, BACKGROUND_RGBA8};
+use crate::shadow::{CubeShadows, Shadowing};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
 
@@ -76,16 +77,17 @@ fn demote_unless_winner(frag: Vec4, p: &ForwardParams, winners: &[u32]) {
 
 /// The sum over `list` at `surface` and its output colour: the light loop of every technique,
 /// one light per iteration, with the variant the frame-uniform specular bit picks (no specular
-/// code for scenes without specular materials).
+/// code for scenes without specular materials), each shadow-casting light times its visibility
+/// from `shadows` (`EFFECT_SHADOWS`, `crate::shadow`).
 #[inline]
-pub(crate) fn shade_list<L: LightList>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L) -> u32 {
+pub(crate) fn shade_list<L: LightList, S: Shadowing>(f: &FrameParams, surface: &Surface, lights: &[PointLight], list: &L, shadows: &S) -> u32 {
     let mut sum = Vec3::ZERO;
     let count = if f.effects & EFFECT_SPECULAR != 0 {
-        let count = shading::shade_lights::<true, false, _>(surface, f.effects, f.num_lights, lights, list, &mut sum);
+        let count = shading::shade_lights_with::<true, false, _, S>(surface, f.effects, f.num_lights, lights, list, shadows, &mut sum);
         shading::shade_directional_lights::<true>(surface, f.effects, f.num_lights, lights, &mut sum);
         count
     } else {
-        let count = shading::shade_lights::<false, false, _>(surface, f.effects, f.num_lights, lights, list, &mut sum);
+        let count = shading::shade_lights_with::<false, false, _, S>(surface, f.effects, f.num_lights, lights, list, shadows, &mut sum);
         shading::shade_directional_lights::<false>(surface, f.effects, f.num_lights, lights, &mut sum);
         count
     };
@@ -107,20 +109,23 @@ pub(crate) fn forward_surface(in_normal: Vec3, front_facing: bool, texel: Vec3, 
 /// `surface` shaded over the list of the tile holding pixel `(px, py)`, as sRGB8. `ARRAY` picks
 /// the list layout (`render --fp-lists`): `false` linked lists (`tiles` = heads, `entries` =
 /// nodes), `true` arrays (`tiles` = `(offset, count)` pairs, `entries` = light indices).
+#[allow(clippy::too_many_arguments)]
 #[inline]
-pub(crate) fn shade_tile<const ARRAY: bool>(f: &FrameParams, px: u32, py: u32, surface: &Surface, tiles: &[u32], entries: &[u32], lights: &[PointLight]) -> u32 {
+pub(crate) fn shade_tile<const ARRAY: bool, S: Shadowing>(f: &FrameParams, px: u32, py: u32, surface: &Surface, tiles: &[u32], entries: &[u32], lights: &[PointLight], shadows: &S) -> u32 {
     let (tx, ty) = f.grid.tile_of_pixel(px, py);
     let tile = (ty * f.grid.tiles_x + tx) as usize;
     if ARRAY {
-        shade_list(f, surface, lights, &shading::index_range(tiles[2 * tile], tiles[2 * tile + 1], |t| entries[t as usize]))
+        shade_list(f, surface, lights, &shading::index_range(tiles[2 * tile], tiles[2 * tile + 1], |t| entries[t as usize]), shadows)
     } else {
-        shade_list(f, surface, lights, &shading::linked_lights(tiles[tile], entries))
+        shade_list(f, surface, lights, &shading::linked_lights(tiles[tile], entries), shadows)
     }
 }
 
 /// The forward shading of one fragment (module docs): its surface at the pixel centre and the
-/// fragment's depth, shaded over its tile's list ([`shade_tile`]). Views: the shaded image and the
-/// heatmap (lights in the tile's list); the other debug views show the shaded image.
+/// fragment's depth, shaded over its tile's list ([`shade_tile`]) with the frame's cube shadow
+/// maps (bound as `slots` and `maps` after the lists; the pipelines of frames without
+/// shadow-casting lights hold no lookup). Views: the shaded image and the heatmap (lights in the
+/// tile's list); the other debug views show the shaded image.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn forward_colour<const ARRAY: bool>(
@@ -134,6 +139,7 @@ pub fn forward_colour<const ARRAY: bool>(
     lights: &[PointLight],
     materials: &[MaterialGpu],
     counters: &[u32],
+    shadows: &CubeShadows<'_>,
 ) -> u32 {
     let f = &p.frame;
     // An overflowed frame is re-run with a larger buffer: draw nothing from a partial list.
@@ -142,7 +148,7 @@ pub fn forward_colour<const ARRAY: bool>(
     }
     let (px, py) = (frag.x as u32, frag.y as u32);
     let surface = forward_surface(in_normal, front_facing, texel, p, materials, shading::pixel_position(&f.grid, px, py, frag.z));
-    shade_tile::<ARRAY>(f, px, py, &surface, tiles, entries, lights)
+    shade_tile::<ARRAY, _>(f, px, py, &surface, tiles, entries, lights, shadows)
 }
 
 variant_entries! {
@@ -160,11 +166,13 @@ variant_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] shadow_maps: &[u32],
         out_colour: &mut u32,
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         demote_unless_winner(frag, p, winners);
-        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, Vec3::ONE, p, tiles, entries, lights, materials, counters);
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, Vec3::ONE, p, tiles, entries, lights, materials, counters, &CubeShadows { slots: shadow_slots, maps: shadow_maps });
     }
 }
 
@@ -184,13 +192,15 @@ variant_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
-        #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] shadow_maps: &[u32],
+        #[spirv(descriptor_set = 0, binding = 12)] albedo_map: &Texture2d,
         out_colour: &mut u32,
     ) {
         let p = &crate::light_types::specialise(p, light_types);
         demote_unless_winner(frag, p, winners);
         let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters);
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters, &CubeShadows { slots: shadow_slots, maps: shadow_maps });
     }
 }
 
@@ -211,8 +221,10 @@ variant_entries! {
         #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] materials: &[MaterialGpu],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 8)] counters: &[u32],
         #[spirv(storage_buffer, descriptor_set = 0, binding = 9)] winners: &[u32],
-        #[spirv(descriptor_set = 0, binding = 10)] albedo_map: &Texture2d,
-        #[spirv(descriptor_set = 0, binding = 11)] mask_map: &Texture2d,
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 10)] shadow_slots: &[u32],
+        #[spirv(storage_buffer, descriptor_set = 0, binding = 11)] shadow_maps: &[u32],
+        #[spirv(descriptor_set = 0, binding = 12)] albedo_map: &Texture2d,
+        #[spirv(descriptor_set = 0, binding = 13)] mask_map: &Texture2d,
         out_colour: &mut u32,
     ) {
         let p = &crate::light_types::specialise(p, light_types);
@@ -221,6 +233,6 @@ variant_entries! {
             spirv_std::arch::demote_to_helper_invocation();
         }
         let texel = sample_draw_uniform(albedo_map, in_uv).truncate();
-        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters);
+        *out_colour = forward_colour::<ARRAY>(frag, in_normal, front_facing, texel, p, tiles, entries, lights, materials, counters, &CubeShadows { slots: shadow_slots, maps: shadow_maps });
     }
 }

@@ -7,6 +7,7 @@ use crate::layout::*;
 use crate::msaa::{albedo_word, float_normal, is_edge, normal_words, sample_key};
 use crate::raster::{sample_draw_uniform, targets, Texture2d, ALPHA_CUTOFF};
 use crate::raster_forward::{forward_surface, shade_tile};
+use crate::shadow::NoShadows;
 use crate::shading::{self, variant_entries, BACKGROUND_RGBA8};
 use spirv_std::glam::{Vec2, Vec3, Vec4};
 use spirv_std::spirv;
@@ -83,7 +84,7 @@ pub fn forward_colour_ms<const ARRAY: bool>(
     let n = g.width * g.height;
     let i = py * g.width + px;
     let owned = visible_samples(g.samples, covered, (f.count, primitive), move |s| (winners[(2 * (s * n + i)) as usize], winners[(2 * (s * n + i) + 1) as usize]));
-    let shade_at = move |pos: Vec3, lights: &[PointLight]| shade_tile::<ARRAY>(f, px, py, &forward_surface(in_normal, front_facing, texel, p, materials, pos), tiles, entries, lights);
+    let shade_at = move |pos: Vec3, lights: &[PointLight]| shade_tile::<ARRAY, _>(f, px, py, &forward_surface(in_normal, front_facing, texel, p, materials, pos), tiles, entries, lights, &NoShadows);
     // A pixel this fragment covers alone is an edge pixel where the edge rule says so of its
     // own samples (a surface seen edge-on): the keys the resolve will read back.
     let (precision, key_words, key_albedo) = (f.normal_precision, normal_words(normal, f.normal_precision), albedo_word(albedo));

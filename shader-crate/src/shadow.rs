@@ -51,6 +51,8 @@
 //! face (the face table), 32 B per caster (its record).
 use crate::layout::PointLight;
 use glam::{Vec3, Vec4};
+#[cfg(target_arch = "spirv")]
+use spirv_std::num_traits::Float;
 #[cfg(feature = "graphics")]
 use spirv_std::spirv;
 
@@ -81,6 +83,35 @@ pub const NO_CONE: f32 = -2.0;
 /// Margin in radians of the cone tests on spot lights' shadows (`shadow_receivers`,
 /// `shadow_cull`), for rounding.
 pub const CONE_MARGIN: f32 = 1e-3;
+
+/// The outer half-angle of a caster record's cone word (`acos(cos_outer)`), or `None` for a point
+/// light ([`NO_CONE`], or NaN): the shadow passes take it once per caster and widen it by the
+/// angle their lookups reach ([`sphere_meets_widened_cone`], `shadow_receivers::spot_faces`).
+#[inline]
+pub fn cone_angle(cos_outer: f32) -> Option<f32> {
+    if cos_outer >= -1.0 {
+        Some(if cos_outer > 1.0 { 0.0 } else { cos_outer.acos() })
+    } else {
+        None
+    }
+}
+
+/// Whether the sphere at offset `d` from a spot light, of radius `r`, may meet the light's cone
+/// of unit `axis` and half-angle `angle` (radians; [`cone_angle`] widened by the caller) plus
+/// [`CONE_MARGIN`] and cut at `range`: the one sphere–cone test of the shadow passes, the
+/// spot lights' culling test (`spot::cone_meets_sphere`: the sphere's distance to the cone's
+/// surface, `|d|·sin(a − angle)` for a centre at angle `a` from the axis, is its radius at
+/// most; the same as `a ≤ angle + asin(r / |d|)`). A cone of half-angle `π` or more is every
+/// direction: always.
+#[inline]
+pub fn sphere_meets_widened_cone(d: Vec3, r: f32, axis: Vec3, angle: f32, range: f32) -> bool {
+    let angle = angle + CONE_MARGIN;
+    if !(angle < core::f32::consts::PI) {
+        return true;
+    }
+    let cone = crate::spot::Cone { direction: axis, cos_inner: 1.0, cos_outer: angle.cos(), sin_outer: angle.sin() };
+    crate::spot::cone_meets_sphere(Vec3::ZERO, &cone, range, d, r)
+}
 /// The receiver's offset along its normal, in texels at its distance (module docs).
 pub const NORMAL_OFFSET_TEXELS: f32 = 1.5;
 /// Distance tolerance of the comparison, in texels at the receiver's distance.

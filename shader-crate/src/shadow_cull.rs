@@ -33,8 +33,6 @@
 //! = 8 B per entry, [`ARGS_WORDS`]` · 4` B of arguments.
 use crate::shadow::{face_axes, face_clip, CubeFrame, FACES};
 use glam::{Mat4, Vec3, Vec4};
-#[cfg(target_arch = "spirv")]
-use spirv_std::num_traits::Float;
 #[cfg(any(feature = "compute", feature = "graphics"))]
 use spirv_std::spirv;
 
@@ -119,23 +117,18 @@ pub fn batch_sphere(batches: &[u32], b: u32) -> (Vec3, f32) {
 pub const LOOKUP_SPREAD_TEXELS: f32 = 3.0;
 
 /// Whether a batch's sphere (offset `d` from a spot light of `radius`, sphere radius `r`) may
-/// hold an occluder that a receiver inside the cone (unit `axis`, outer cosine `cos_outer`)
-/// looks up on a face of `side` texels: a point the spot lights lies in its cone, the segment
-/// to it too, and its lookup reads texels at most [`LOOKUP_SPREAD_TEXELS`] texels of angle
-/// (each at most `2 / side` radians) away; so the cone widened by that angle
-/// (`spot::cone_meets_sphere`) holds every occluder a lookup can see. Always for a point light.
+/// hold an occluder that a receiver inside the cone (unit `axis`, outer half-angle `angle`,
+/// `shadow::cone_angle`) looks up on a face of `side` texels: a point the spot lights lies in
+/// its cone, the segment to it too, and its lookup reads texels at most
+/// [`LOOKUP_SPREAD_TEXELS`] texels of angle (each at most `2 / side` radians) away; so the cone
+/// widened by that angle (`shadow::sphere_meets_widened_cone`) holds every occluder a lookup can
+/// see. Always for a point light (`angle` `None`).
 #[inline]
-pub fn batch_meets_cone(d: Vec3, r: f32, radius: f32, axis: Vec3, cos_outer: f32, side: u32) -> bool {
-    if !(cos_outer >= -1.0) {
-        return true;
+pub fn batch_meets_cone(d: Vec3, r: f32, radius: f32, axis: Vec3, angle: Option<f32>, side: u32) -> bool {
+    match angle {
+        Some(a) => crate::shadow::sphere_meets_widened_cone(d, r, axis, a + 2.0 * LOOKUP_SPREAD_TEXELS / side as f32, radius),
+        None => true,
     }
-    let c = if cos_outer > 1.0 { 1.0 } else { cos_outer };
-    let angle = c.acos() + 2.0 * LOOKUP_SPREAD_TEXELS / side as f32 + crate::shadow::CONE_MARGIN;
-    if angle >= core::f32::consts::PI {
-        return true;
-    }
-    let cone = crate::spot::Cone { direction: axis, cos_inner: 1.0, cos_outer: angle.cos(), sin_outer: angle.sin() };
-    crate::spot::cone_meets_sphere(Vec3::ZERO, &cone, radius, d, r)
 }
 
 /// Step 1 for batch `b` and caster `c` (`casters`: caster records, `shadow::caster_record`;
@@ -156,10 +149,12 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
     let offset = (view * centre.extend(1.0)).truncate() - light;
     let mask = face_mask(CubeFrame::of_cone(axis, cos_outer).local(offset), r, casters[k + 3]);
+    // The cone's half-angle once per batch and caster, its widening per face.
+    let angle = crate::shadow::cone_angle(cos_outer);
     let mut f = 0;
     while f < FACES {
         let side = crate::shadow::face_entry(slots, c * FACES + f).1;
-        if mask & (1 << f) != 0 && side != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, cos_outer, side) {
+        if mask & (1 << f) != 0 && side != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, angle, side) {
             let slot = counted.fetch_add(1);
             if slot < p.capacity {
                 entries[(slot * ENTRY_WORDS) as usize] = b;

@@ -12,7 +12,7 @@
 //! 2. **Faces** ([`shadow_receiver_faces`], one invocation per caster and run of
 //!    [`TILES_PER_INVOCATION`] tiles, [`receiver_faces`]): each tile's sphere, widened by the
 //!    lookup's normal offset ([`lookup_reach`]), through `shadow_cull::face_mask` against the
-//!    caster (none where it lies outside a spot light's cone, [`sphere_meets_cone`], and only
+//!    caster (none where it lies outside a spot light's cone, `shadow::sphere_meets_widened_cone`, and only
 //!    the faces the cone, widened by the lookup's offset, meets, [`spot_faces`]: a spot light
 //!    takes only faces its cone lights, and its cube is turned to its cone,
 //!    `shadow::CubeFrame`: one face for a cone of at most 42°, three up to 70°); each face met keeps the largest resolution level its
@@ -26,7 +26,7 @@
 //!
 //! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 4 B per caster face.
 use crate::layout::ClusterGrid;
-use crate::shadow::{CubeFrame, CASTER_WORDS, CONE_MARGIN, FACES, NORMAL_OFFSET_TEXELS};
+use crate::shadow::{cone_angle, sphere_meets_widened_cone, CubeFrame, CASTER_WORDS, CONE_MARGIN, FACES, NORMAL_OFFSET_TEXELS};
 use crate::shadow_atlas::{face_side, receiver_level};
 use crate::shadow_cull::{face_mask, CULL_MARGIN};
 use glam::Vec3;
@@ -146,6 +146,9 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
     let (light, radius) = (Vec3::new(casters[k], casters[k + 1], casters[k + 2]), casters[k + 3]);
     let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
     let frame = CubeFrame::of_cone(axis, cos_outer);
+    // The cone's half-angle once per caster and tile range (`None`: a point light).
+    let angle = cone_angle(cos_outer);
+    let local_axis = frame.local(axis);
     let n = p.tiles_x * p.tiles_y;
     let end = if first + TILES_PER_INVOCATION < n { first + TILES_PER_INVOCATION } else { n };
     let mut levels = 0;
@@ -162,10 +165,12 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
             let level = receiver_level(centre, r, light, g.near, g.height, g.tan_half_fov_y, p.res);
             let side = face_side(level, 0, p.res);
             let widened = r + lookup_reach(far, side);
-            let mask = if sphere_meets_cone(d, widened, axis, cos_outer) {
-                face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & spot_faces(side, frame.local(axis), cos_outer)
-            } else {
-                0
+            // A receiver outside its light's cone gets no light from it (the spot falloff ends
+            // at the outer angle), so its faces need no texels.
+            let mask = match angle {
+                None => face_mask(frame.local(d), widened, radius + CULL_MARGIN * far),
+                Some(a) if sphere_meets_widened_cone(d, widened, axis, a, far) => face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & spot_faces(side, local_axis, a),
+                Some(_) => 0,
             };
             let mut f = 0;
             while f < FACES {
@@ -180,42 +185,20 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
     levels
 }
 
-/// Whether a sphere at offset `d` from a spot light, of radius `r`, may hold a point inside the
-/// cone of unit `axis` and outer half-angle `acos(cos_outer)` (always for a point light,
-/// `cos_outer` = [`NO_CONE`](crate::shadow::NO_CONE)): the angle between `d` and the axis is at
-/// most the half-angle plus the sphere's angular radius `asin(r / |d|)`, with a margin of
-/// [`CONE_MARGIN`] radians for rounding. A receiver outside its light's cone gets no light from
-/// it (the spot falloff ends at the outer angle), so its faces need no texels.
-#[inline]
-pub fn sphere_meets_cone(d: Vec3, r: f32, axis: Vec3, cos_outer: f32) -> bool {
-    let len = d.length();
-    if !(cos_outer >= -1.0) || len <= r {
-        return true;
-    }
-    let cos_a = d.dot(axis) / len;
-    let a = clamp_unit(cos_a).acos();
-    let outer = clamp_unit(cos_outer).acos();
-    let spread = (r / len).asin();
-    a <= outer + spread + CONE_MARGIN
-}
-
-/// The faces a receiver of a tile whose faces take `side` texels may look up through the cone of
-/// unit `axis` (in the light's cube axes, `shadow::CubeFrame::local`) and outer half-angle
-/// `acos(cos_outer)`: every face for a point light, else [`cone_faces`] of the cone widened by
-/// the angle the lookup's normal offset turns a direction. The offset is
+/// The faces a receiver of a tile whose faces take `side` texels may look up through a spot
+/// light's cone of unit `axis` (in the light's cube axes, `shadow::CubeFrame::local`) and outer
+/// half-angle `angle` (`shadow::cone_angle`): [`cone_faces`] of the cone widened by the angle
+/// the lookup's normal offset turns a direction. The offset is
 /// [`NORMAL_OFFSET_TEXELS`] texels of `2ρ / side` at the receiver's distance `ρ` from the light
 /// (`shadow::cube_visibility`, its own face having at least this side), so it turns the
 /// direction by at most `asin(NORMAL_OFFSET_TEXELS · 2 / side)` whatever `ρ`. A point the spot
 /// lights lies inside the cone; its lookup direction within that angle of it, so on one of
 /// these faces.
 #[inline]
-pub fn spot_faces(side: u32, axis: Vec3, cos_outer: f32) -> u32 {
-    if !(cos_outer >= -1.0) {
-        return (1 << FACES) - 1;
-    }
+pub fn spot_faces(side: u32, axis: Vec3, angle: f32) -> u32 {
     let s = NORMAL_OFFSET_TEXELS * 2.0 / side as f32;
     let widen = if s < 1.0 { s.asin() } else { core::f32::consts::PI };
-    cone_faces(axis, clamp_unit(cos_outer).acos() + widen + CONE_MARGIN)
+    cone_faces(axis, angle + widen + CONE_MARGIN)
 }
 
 /// The faces (bit `f` for face `f`) whose pyramid meets the cone of unit `axis` and half-angle
@@ -271,17 +254,6 @@ pub fn pyramid_cos(a: Vec3) -> f32 {
 }
 
 
-/// `x` within `[−1, 1]`.
-#[inline]
-fn clamp_unit(x: f32) -> f32 {
-    if x < -1.0 {
-        -1.0
-    } else if x > 1.0 {
-        1.0
-    } else {
-        x
-    }
-}
 
 /// `fetch_max` on a storage-buffer word: `OpAtomicUMax` (device scope, relaxed) on the GPU, a
 /// plain maximum off it.

@@ -1,6 +1,6 @@
 use super::*;
 use crate::reconstruct::{distance_from_depth, is_background, view_position};
-use crate::shadow::{cube_face, FACES, NO_CONE};
+use crate::shadow::{cone_angle, cube_face, sphere_meets_widened_cone, FACES, NO_CONE};
 use crate::test_support::{gbuffer, grid, Rng};
 
 fn params(g: ClusterGrid, res: u32, casters: u32) -> ReceiverParams {
@@ -139,10 +139,11 @@ fn the_cone_test_keeps_every_sphere_that_reaches_into_the_cone() {
     let (mut met, mut missed) = (0, 0);
     for _ in 0..20_000 {
         let axis = unit(&mut rng);
-        let outer = 0.05 + 1.5 * rng.unit();
+        // Up to 3 rad: the shadow passes widen spot cones of up to 90° past it.
+        let outer = 0.05 + 3.0 * rng.unit();
         let (d, r) = (unit(&mut rng) * (0.1 + 10.0 * rng.unit()), 3.0 * rng.unit() * rng.unit());
-        let meets = sphere_meets_cone(d, r, axis, outer.cos());
-        assert!(sphere_meets_cone(d, r, axis, NO_CONE));
+        let meets = sphere_meets_widened_cone(d, r, axis, cone_angle(outer.cos()).unwrap(), d.length() + r);
+        assert!(cone_angle(NO_CONE).is_none() && cone_angle(f32::NAN).is_none(), "point lights take no cone test");
         // Points of the sphere: its centre and points towards the axis.
         let towards = (axis * d.length() - d).normalize_or(Vec3::ZERO);
         let angle = |q: Vec3| q.normalize().dot(axis).clamp(-1.0, 1.0).acos();

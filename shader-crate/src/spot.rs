@@ -12,20 +12,22 @@
 //! cluster's box's, or a tile's) can meet it only if
 //! 1. it meets the range sphere (the point light's test, done by the caller), and
 //! 2. it meets the cone: with `v = c − apex`, `v₁ = v·d` (the distance along the axis) and
-//!    `v₂ = |v − v₁·d|` (from the axis), the signed distance from `c` to the cone's surface is
-//!    `v₂·cos θ − v₁·sin θ`; the sphere misses the cone when that exceeds `r` (it lies outside
-//!    the lateral surface), or when `v₁ < −r` (entirely behind the apex's plane), or when
+//!    `v₂ = |v − v₁·d|` (from the axis), the distance from `c` to the infinite cone (`θ < 90°`)
+//!    is `v₂·cos θ − v₁·sin θ` where the closest point lies on the lateral surface, and `|v|`
+//!    where it is the apex (`v₁·cos θ + v₂·sin θ < 0`: `c` more than `θ + 90°` from the axis);
+//!    the sphere misses the cone when that distance exceeds `r`, or when `v₁ < −r` (entirely
+//!    behind the apex's plane, which a cone of `θ = 90°` is bounded by), or when
 //!    `v₁ > r + range` (beyond the range along the axis) — [`cone_meets_sphere`].
 //!
-//! The distance to the surface is exact for the infinite cone with `θ ≤ 90°` when the closest
-//! point lies on the lateral surface, and the apex region is covered by the `v₁ < −r` test being
-//! checked only against the apex's plane, so the test never rejects a sphere that meets the lit
-//! set: it is conservative (the tests sample points in each sphere to show it). It is not exact
-//! (a sphere near the apex, behind the lateral surface, is kept), which costs list entries, not
-//! light. Both comparisons carry a relative slack of [`CONE_TEST_SLACK`] of the magnitudes
-//! involved so that rounding never culls a light that reaches a point of the sphere.
+//! The distance is exact for the infinite cone, so the cone part of the test is exact: a sphere
+//! is rejected exactly when the cone of directions its centre sees it in (half-angle
+//! `asin(r/|v|)`) misses the lit cone (`shadow::sphere_meets_widened_cone` is the same test for
+//! the shadow passes); the range cut along the axis is conservative (the tests sample points in
+//! each rejected sphere). Both comparisons carry a relative slack of [`CONE_TEST_SLACK`] of the
+//! magnitudes involved so that rounding never culls a light that reaches a point of the
+//! sphere.
 //!
-//! Cost per light–cluster pair: 2 dot products, a square root, 3 comparisons. Memory: none; the
+//! Cost per light–cluster pair: 2 dot products, a square root, 4 comparisons. Memory: none; the
 //! light's direction and cone cosines come with it.
 //!
 //! Where it runs: every shading pass multiplies a spot's light by [`spot_factor`]
@@ -94,8 +96,13 @@ pub fn cone_meets_sphere(apex: Vec3, cone: &Cone, range: f32, c: Vec3, r: f32) -
     let v2 = if axial2 > 0.0 { axial2.sqrt() } else { 0.0 };
     let scale = v.length() + r + range;
     let slack = scale * CONE_TEST_SLACK;
-    let outside = v2 * cone.cos_outer - v1 * cone.sin_outer > r + slack;
-    let behind = v1 < -r - slack;
+    // Closest to the apex (only below 90°: a wider cone has no such region).
+    let apex_closest = cone.cos_outer > 0.0 && v1 * cone.cos_outer + v2 * cone.sin_outer < 0.0;
+    let distance = if apex_closest { v.length() } else { v2 * cone.cos_outer - v1 * cone.sin_outer };
+    let outside = distance > r + slack;
+    // Behind the apex's plane: outside a cone of at most 90° (a wider one, which only the
+    // shadow passes' widened cones are, reaches behind it).
+    let behind = cone.cos_outer >= 0.0 && v1 < -r - slack;
     let beyond = v1 > r + range + slack;
     !(outside || behind || beyond)
 }

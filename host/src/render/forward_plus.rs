@@ -12,6 +12,11 @@
 //!    fragment walking its tile's linked list or reading its tile's index range; the colour
 //!    target is copied into the frame.
 //!
+//! Scenes with shadow-casting lights record the cube shadow maps (`shadow_maps.rs`) between
+//! steps 1 and 2: their receivers are the pre-pass's depths (copied into the G-buffer's depth
+//! buffer in step 1, as the deferred techniques' G-buffer pass leaves them), and step 3's
+//! fragments look each casting light's visibility up as every compute-shaded technique does.
+//!
 //! Scenes with transparent draws (`transparent.rs`) add, after step 1, a raster pre-pass of the
 //! transparent draws against the pre-pass depth that widens each tile's depth range to its
 //! transparent fragments (`TILE_DEPTH_WORDS` per tile); step 2 then culls with the
@@ -131,7 +136,7 @@ pub const FORWARD_PLUS: Description = Description {
     own_raster: &[],
     msaa: true,
     light_words: 0,
-    shadows: false,
+    shadows: true,
 };
 
 /// What `--msaa N` (N > 1) adds (`shaders::forward_msaa`): the pre-pass's and the forward pass's
@@ -350,12 +355,16 @@ impl LightingTechnique for ForwardPlus {
                 None => Ok(()),
             }
         })?;
+        // The receivers of the shadow maps are the pre-pass's depths, now in the G-buffer's
+        // depth buffer; the culling's barrier puts the maps before the forward pass's fragments.
+        f.record_shadow_maps(rec)?;
         self.record_culling(gpu, rec, f)?;
         rec.pass("shading", |rec| {
             rec.transition(&self.colour, ImageUse::Undefined, ImageUse::ColourTarget);
             let colour = Attachment { image: &self.colour, load: Load::ClearU32([shaders::shading::BACKGROUND_RGBA8, 0, 0, 0]) };
             rec.begin_rendering(&[colour], Attachment { image: &self.depth, load: Load::Keep }, &self.reversed);
-            let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners];
+            let [slots, maps] = f.shadow_buffers();
+            let extra = [&self.tiles, &self.entries, f.lights, f.materials, &self.counters, &self.winners, slots, maps];
             // The variants for the frame's light types.
             let [a, b, c] = raster.forward_shade[self.lists.index()].each_ref().map(|v| v.get(self.params.frame.effects));
             self.draw_all(rec, f, &[a?, b?, c?], &extra, true, true)?;

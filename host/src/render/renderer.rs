@@ -324,13 +324,13 @@ impl Renderer {
                     if let Some(t) = &res.tessellation {
                         rec.pass("tessellation", |rec| t.record(rec, &res.geometry))?;
                     }
+                    // Without the G-buffer pass the technique records the shadow maps itself,
+                    // after the pass that gives it depths (`FrameInputs::record_shadow_maps`).
                     if res.settings.technique.description().gbuffer {
                         rec.pass("gbuffer", |rec| gbuffer::record(gpu, rec, &res.geometry, &res.textures, &res.camera, &res.targets, res.msaa.as_ref(), &res.params))?;
+                        inputs.record_shadow_maps(rec)?;
                     }
-                    match &res.shadows {
-                        Some(sh) => rec.pass("shadow maps", |rec| sh.record(rec, &res.geometry, &res.camera, &res.targets.depth_buf, res.params.grid)),
-                        None => Ok(()),
-                    }
+                    Ok(())
                 },
                 |rec| tech.record(gpu, rec, &inputs),
             )?;

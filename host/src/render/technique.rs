@@ -84,6 +84,17 @@ impl FrameInputs<'_> {
         }
     }
 
+    /// Records the cube shadow maps' pass (scenes with shadow-casting lights; nothing without)
+    /// from the depths in `targets.depth_buf`: the frame loop records it after the G-buffer, and
+    /// a technique without the G-buffer pass ([`Description::gbuffer`] false) once it has put its
+    /// own depths there, before its shading reads [`FrameInputs::shadow_buffers`].
+    pub fn record_shadow_maps(&self, rec: &mut Recorder<'_>) -> VkResult<()> {
+        match self.shadows {
+            Some(sh) => rec.pass("shadow maps", |rec| sh.record(rec, self.geometry, self.camera, &self.targets.depth_buf, self.params.grid)),
+            None => Ok(()),
+        }
+    }
+
     /// The bindings of a draw of a raster pass: the vertex stage's storage buffers, `extra`
     /// storage buffers of the fragment stage, then the draw's `textures` (0, 1 or 2).
     pub fn draw_bindings<'b>(&'b self, extra: &[&'b Buffer], draw: &Draw, textures: usize) -> Vec<Binding<'b>> {
@@ -159,7 +170,8 @@ pub struct Description {
     /// (bound whole, so below 2^31 bytes: the preflight's light limit names it); 0 for none.
     pub light_words: u32,
     /// Whether its shading multiplies each shadow-casting light by its visibility from the
-    /// frame's cube shadow maps (`shadow_maps.rs`; it binds [`FrameInputs::shadow_buffers`]);
+    /// frame's cube shadow maps (`shadow_maps.rs`; it binds [`FrameInputs::shadow_buffers`],
+    /// and without the G-buffer pass records the maps itself, [`FrameInputs::record_shadow_maps`]);
     /// scenes with shadow-casting lights are refused in one line for the others.
     pub shadows: bool,
 }
