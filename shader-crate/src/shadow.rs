@@ -84,6 +84,11 @@ pub const NO_CONE: f32 = -2.0;
 /// `shadow_cull`), for rounding.
 pub const CONE_MARGIN: f32 = 1e-3;
 
+/// The receiver's offset along its normal, in texels at its distance (module docs).
+pub const NORMAL_OFFSET_TEXELS: f32 = 1.5;
+/// Distance tolerance of the comparison, in texels at the receiver's distance.
+pub const DEPTH_BIAS_TEXELS: f32 = 1.0;
+
 /// The outer half-angle of a caster record's cone word (`acos(cos_outer)`), or `None` for a point
 /// light ([`NO_CONE`], or NaN): the shadow passes take it once per caster and widen it by the
 /// angle their lookups reach ([`sphere_meets_widened_cone`], `shadow_receivers::spot_faces`).
@@ -112,10 +117,6 @@ pub fn sphere_meets_widened_cone(d: Vec3, r: f32, axis: Vec3, angle: f32, range:
     let cone = crate::spot::Cone { direction: axis, cos_inner: 1.0, cos_outer: angle.cos(), sin_outer: angle.sin() };
     crate::spot::cone_meets_sphere(Vec3::ZERO, &cone, range, d, r)
 }
-/// The receiver's offset along its normal, in texels at its distance (module docs).
-pub const NORMAL_OFFSET_TEXELS: f32 = 1.5;
-/// Distance tolerance of the comparison, in texels at the receiver's distance.
-pub const DEPTH_BIAS_TEXELS: f32 = 1.0;
 
 /// Cosine of the widest outer half-angle (42°) whose cone a caster's [`CubeFrame`] centres on
 /// one face: the face's pyramid holds every direction within 45° of its axis, and the 3° left

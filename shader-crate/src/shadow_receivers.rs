@@ -165,13 +165,15 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
             let level = receiver_level(centre, r, light, g.near, g.height, g.tan_half_fov_y, p.res);
             let side = face_side(level, 0, p.res);
             let widened = r + lookup_reach(far, side);
-            // A receiver outside its light's cone gets no light from it (the spot falloff ends
-            // at the outer angle), so its faces need no texels.
-            let mask = match angle {
-                None => face_mask(frame.local(d), widened, radius + CULL_MARGIN * far),
-                Some(a) if sphere_meets_widened_cone(d, widened, axis, a, far) => face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & spot_faces(side, local_axis, a),
+            // The faces the light's cone allows: all for a point light; none for a receiver
+            // outside a spot light's cone, which gets no light from it (the spot falloff ends at
+            // the outer angle), so its faces need no texels.
+            let cone = match angle {
+                None => (1 << FACES) - 1,
+                Some(a) if sphere_meets_widened_cone(d, widened, axis, a, far) => spot_faces(side, local_axis, a),
                 Some(_) => 0,
             };
+            let mask = if cone != 0 { face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & cone } else { 0 };
             let mut f = 0;
             while f < FACES {
                 if mask & (1 << f) != 0 && packed_level(levels, f) < level {
