@@ -104,9 +104,9 @@ pub fn tile_clusters(
     // With MSAA (`crate::msaa`) every sample's key, plane by plane (`s·n + i`).
     let to_keys = &mut *keys;
     let (tile_pixels, plane) = (rect.2 * rect.3, g.width * g.height);
-    let slice_of = move |q: u32| {
-        let (px, py) = tile_clusters::tile_pixel(rect, q % tile_pixels);
-        let at = (q / tile_pixels) * plane + py * g.width + px;
+    let slice_of = move |s: u32, q: u32| {
+        let (px, py) = tile_clusters::tile_pixel(rect, q);
+        let at = s * plane + py * g.width + px;
         let key = page_table::pixel_key(g, bounds, px, py, depth[at as usize]);
         to_keys[at as usize] = key;
         if key == INVALID_KEY {
@@ -126,7 +126,7 @@ pub fn tile_clusters(
         }
         first
     };
-    let (mask, first) = tile_clusters::tile_clusters(&c, shared, words, tile_pixels * g.samples, slice_of, reserve);
+    let (mask, first) = tile_clusters::tile_clusters(&c, shared, words, tile_pixels, g.samples, slice_of, reserve);
     if local_index < words {
         let at = tile_clusters::record_at(g, i, j, local_index) as usize;
         records[at] = mask;

@@ -195,9 +195,42 @@ pub fn light_at(lights: &[PointLight], effects: u32, n: u32, l: u32) -> PointLig
     if effects & EFFECT_COMPACT_LIGHTS != 0 {
         compact_at(lights, n, l)
     } else {
-        // In bounds: the buffer holds the `n` lights (one record for none).
-        *crate::unchecked::get(lights, if l < n { l } else { n.max(1) - 1 })
+        *full_record(lights, n, l)
     }
+}
+
+/// The sphere of light `l` as [`light_at`] reads it: its position and radius, read before the
+/// rest of its record (`shading::shade_one`): a listed light that does not reach the pixel
+/// costs the 16 bytes of its sphere, not the 32 of its record (compact records are decoded
+/// whole; the decode of [`light_emission`] reads the same words again, which the compiler merges).
+#[inline]
+pub fn light_sphere(lights: &[PointLight], effects: u32, n: u32, l: u32) -> (Vec3, f32) {
+    if effects & EFFECT_COMPACT_LIGHTS != 0 {
+        let d = compact_at(lights, n, l);
+        (Vec3::from_array(d.position), d.radius)
+    } else {
+        let r = full_record(lights, n, l);
+        (Vec3::from_array(r.position), r.radius)
+    }
+}
+
+/// The colour and intensity of light `l` as [`light_at`] reads them.
+#[inline]
+pub fn light_emission(lights: &[PointLight], effects: u32, n: u32, l: u32) -> (Vec3, f32) {
+    if effects & EFFECT_COMPACT_LIGHTS != 0 {
+        let d = compact_at(lights, n, l);
+        (Vec3::from_array(d.colour), d.intensity)
+    } else {
+        let r = full_record(lights, n, l);
+        (Vec3::from_array(r.colour), r.intensity)
+    }
+}
+
+/// Full record `l` of `n` in place (`l` from `n` on reads record `n − 1`; in bounds: the buffer
+/// holds the `n` lights, one record for none).
+#[inline]
+fn full_record(lights: &[PointLight], n: u32, l: u32) -> &PointLight {
+    crate::unchecked::get(lights, if l < n { l } else { n.max(1) - 1 })
 }
 
 /// Packs `lights` (all inside `frame`'s box) into a compact buffer: header, then two per record.

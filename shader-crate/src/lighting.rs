@@ -284,13 +284,33 @@ pub fn unit_normal(n: Vec3) -> Vec3 {
 /// once per pixel, not once per light (same result).
 #[inline]
 pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, specular: f32, roughness: f32, light: &PointLight, effects: u32) -> Vec3 {
-    let c = Vec3::from_array(light.position);
+    let emission = || (Vec3::from_array(light.colour), light.intensity);
+    shade_sphere::<SPECULAR>(p, n, albedo, specular, roughness, Vec3::from_array(light.position), light.radius, effects, emission)
+}
+
+/// [`shade_unit_normal`] of a light at `c` of range `radius` whose colour and intensity
+/// `emission` reads only where the light reaches `p` in front of the surface: the light loops
+/// read a listed light's sphere first and the rest of its record only where it adds something
+/// (`shading::shade_one`; reading each record whole first made the loop 5 % slower on an H100).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn shade_sphere<const SPECULAR: bool>(
+    p: Vec3,
+    n: Vec3,
+    albedo: Vec3,
+    specular: f32,
+    roughness: f32,
+    c: Vec3,
+    radius: f32,
+    effects: u32,
+    emission: impl FnOnce() -> (Vec3, f32),
+) -> Vec3 {
     let dist2 = distance2(p, c);
     // The cheap rejections first, each as exact as the full evaluation: out of range (both
     // falloffs are 0 unless `dist2 < radius²`), then behind the surface (`n·l ≤ 0`, with `n·l`
     // as `n·(c − p) / |c − p|`: the direction is normalised only where the specular lobe
     // needs it). Then the falloff.
-    if !(dist2 < light.radius * light.radius) {
+    if !(dist2 < radius * radius) {
         return Vec3::ZERO;
     }
     let to_light = c - p;
@@ -305,8 +325,9 @@ pub fn shade_unit_normal<const SPECULAR: bool>(p: Vec3, n: Vec3, albedo: Vec3, s
     if !(ndotl > 0.0) {
         return Vec3::ZERO;
     }
-    let att = falloff(dist2, light.radius, effects);
-    brdf_radiance::<SPECULAR>(p, n, l, ndotl, albedo, specular, roughness, att, light.intensity, Vec3::from_array(light.colour), effects)
+    let att = falloff(dist2, radius, effects);
+    let (colour, intensity) = emission();
+    brdf_radiance::<SPECULAR>(p, n, l, ndotl, albedo, specular, roughness, att, intensity, colour, effects)
 }
 
 /// Radiance from `p` lit from the unit direction `to_light` (view space) with irradiance

@@ -31,7 +31,7 @@
 //! them as a specialization constant (`light_types`, "Specialised pipelines"), so the driver
 //! folds [`shade_lights`]' and [`shade_directional_lights`]' `EFFECT_SPOT` / `EFFECT_DIRECTIONAL`
 //! branches away.
-use crate::compact_light::light_at;
+use crate::compact_light::{light_emission, light_sphere};
 use crate::layout::*;
 use crate::light_types::{cone_of, directional_base, directional_count, EFFECT_SHADOWS, EFFECT_SPOT};
 use crate::shadow::{NoShadows, Shadowing, NO_CONE};
@@ -402,36 +402,38 @@ fn shade_range<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, ef
     let mut t = first;
     while t < end {
         let l = list.at(t);
-        *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
+        *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, shadows);
         t += 1;
         if t < end {
             let l = list.at(t);
-            *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
+            *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, shadows);
             t += 1;
         }
     }
     end - first
 }
 
-/// The radiance of punctual light `l` (record `light`) at `s` (unit normal, [`shade_lights`]):
-/// [`lighting::shade_variant`],
+/// The radiance of punctual light `l` at `s` (unit normal, [`shade_lights`]):
+/// [`lighting::shade_variant`] of its record, read sphere first ([`lighting::shade_sphere`]),
 /// times its cone falloff ([`spot::spot_factor`]) when the frame has spot lights
 /// ([`EFFECT_SPOT`]; a point light's marker record gives exactly 1), times its visibility
 /// where the frame has shadow-casting lights ([`EFFECT_SHADOWS`]; looked up only where the light
 /// adds something).
 #[inline]
-fn shade_one<const SPECULAR: bool, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, light: &PointLight, shadows: &S) -> Vec3 {
-    let radiance = lighting::shade_unit_normal::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, light, effects);
+fn shade_one<const SPECULAR: bool, S: Shadowing>(s: &Surface, effects: u32, num_lights: u32, lights: &[PointLight], l: u32, shadows: &S) -> Vec3 {
+    let (c, radius) = light_sphere(lights, effects, num_lights, l);
+    let emission = || light_emission(lights, effects, num_lights, l);
+    let radiance = lighting::shade_sphere::<SPECULAR>(s.pos, s.normal, s.albedo, s.specular, s.roughness, c, radius, effects, emission);
     // The cone's axis and outer cosine also lay out the light's cube (`shadow::CubeFrame`; a
     // point light's marker record and a frame without spots give view space's axes).
     let (radiance, axis, cos_outer) = if effects & EFFECT_SPOT != 0 {
         let cone = cone_of(lights, num_lights, l);
-        (radiance * spot::spot_factor(Vec3::from_array(light.position), &cone, s.pos), cone.direction, cone.cos_outer)
+        (radiance * spot::spot_factor(c, &cone, s.pos), cone.direction, cone.cos_outer)
     } else {
         (radiance, Vec3::ZERO, NO_CONE)
     };
     if effects & EFFECT_SHADOWS != 0 && radiance.max_element() > 0.0 {
-        radiance * shadows.visibility(l, Vec3::from_array(light.position), axis, cos_outer, s.pos, s.normal)
+        radiance * shadows.visibility(l, c, axis, cos_outer, s.pos, s.normal)
     } else {
         radiance
     }
@@ -447,7 +449,7 @@ fn shade_next<const SPECULAR: bool, L: LightList, S: Shadowing>(s: &Surface, eff
         return false;
     }
     *pos = next;
-    *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, &light_at(lights, effects, num_lights, l), shadows);
+    *sum += shade_one::<SPECULAR, S>(s, effects, num_lights, lights, l, shadows);
     true
 }
 

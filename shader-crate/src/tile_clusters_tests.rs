@@ -29,7 +29,10 @@ struct Frame {
 
 /// The tile kernel over every tile of `g`, tiles launched in `order`, in the CPU emulation at
 /// subgroup width `width`; the writes the GPU entry makes, made from each invocation's result.
+/// `depth` holds one plane of `width × height` per sample (MSAA, `crate::msaa`): entry `s·n + i`.
 fn run(g: &ClusterGrid, bounds: &[f32], depth: &[f32], width: u32, per_group: u32, reversed: bool) -> Frame {
+    let plane = g.width * g.height;
+    let planes = depth.len() as u32 / plane;
     let tiles = g.tiles_x * g.tiles_y;
     let words = mask_words(g);
     let counter = AtomicU32::new(0);
@@ -39,9 +42,9 @@ fn run(g: &ClusterGrid, bounds: &[f32], depth: &[f32], width: u32, per_group: u3
     let results = run_workgroups(emu, tiles, |group, c, s| {
         let t = tile_of(group);
         let rect = tile_rect(g, t % g.tiles_x, t / g.tiles_x);
-        let slice_of = |q: u32| {
+        let slice_of = |s: u32, q: u32| {
             let (px, py) = tile_pixel(rect, q);
-            let key = pixel_key(g, bounds, px, py, depth[(py * g.width + px) as usize]);
+            let key = pixel_key(g, bounds, px, py, depth[(s * plane + py * g.width + px) as usize]);
             if key == INVALID_KEY { NO_SLICE } else { g.unpack(key).2 }
         };
         let reserve = |n: u32| {
@@ -53,7 +56,7 @@ fn run(g: &ClusterGrid, bounds: &[f32], depth: &[f32], width: u32, per_group: u3
             }
             first
         };
-        tile_clusters(c, s, words, rect.2 * rect.3, slice_of, reserve)
+        tile_clusters(c, s, words, rect.2 * rect.3, planes, slice_of, reserve)
     });
     // Workgroup (0, 0)'s raise of the rows and the depth.
     args[1].fetch_max(1, Ordering::Relaxed);
@@ -75,26 +78,27 @@ fn run(g: &ClusterGrid, bounds: &[f32], depth: &[f32], width: u32, per_group: u3
             });
         }
     }
-    let keys = (0..g.width * g.height).map(|i| pixel_key(g, bounds, i % g.width, i / g.width, depth[i as usize])).collect();
+    let keys = (0..planes * plane).map(|e| pixel_key(g, bounds, e % plane % g.width, e % plane / g.width, depth[e as usize])).collect();
     Frame { keys, records, unique, args: args.map(|a| a.into_inner()) }
 }
 
 /// Every tile finds exactly its distinct keys: the list holds each key of the frame once and
 /// nothing else, every pixel's lookup lands on its own key, and the assignment's dispatch
 /// covers the list, at every subgroup width, for tiles of fewer and more pixels than the
-/// workgroup, partial border tiles, and whatever order the tiles reserve in.
+/// workgroup, partial border tiles, whatever order the tiles reserve in, and one or four sample
+/// planes (each sample's key found in its own plane).
 #[test]
 fn each_tile_lists_its_distinct_keys_once_and_pixels_find_them() {
-    for (w, h, tile) in [(67, 45, 8), (130, 70, 16), (200, 97, 32), (300, 200, 64)] {
+    for (w, h, tile, planes) in [(67, 45, 8, 1), (130, 70, 16, 1), (200, 97, 32, 1), (300, 200, 64, 1), (67, 45, 8, 4), (200, 97, 32, 4)] {
         let g = ClusterGrid::new(w, h, tile, 0.1, 1000.0, 1.0).expect("valid grid");
         assert!(serves(&g) && mask_words(&g) > 1, "{g:?}");
         let bounds = crate::cluster_key::slice_bounds(&g);
-        let depth = depth_buffer(&g, w ^ tile);
+        let depth: Vec<f32> = (0..planes).flat_map(|s| depth_buffer(&g, w ^ tile ^ (s << 20))).collect();
         for width in [4, 8, 16, 32, 64] {
             for reversed in [false, true] {
                 let per_group = 2;
                 let f = run(&g, &bounds, &depth, width, per_group, reversed);
-                let case = format!("{w}x{h}, {tile} px tiles, width {width}, reversed {reversed}");
+                let case = format!("{w}x{h}, {tile} px tiles, {planes} planes, width {width}, reversed {reversed}");
                 let mut sorted = f.unique.clone();
                 sorted.sort_unstable();
                 assert_eq!(sorted, unique_keys_reference(&f.keys), "{case}");

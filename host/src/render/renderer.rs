@@ -8,7 +8,7 @@
 //! re-uploaded camera-relative, `camera_relative.rs`), replaces the lights
 //! ([`Renderer::set_lights`]) or changes the technique or the view ([`Renderer::set_settings`]:
 //! the technique is created anew). A new frame size is a new renderer.
-use super::technique::{ClusterLists, FrameInputs, LightingTechnique, ListStats, MAX_REGROWTHS};
+use super::technique::{ClusterLists, Description, FrameInputs, LightingTechnique, ListStats, MAX_REGROWTHS};
 use super::Technique;
 use super::light_types::{self, light_records};
 use super::shadow_maps::ShadowMaps;
@@ -112,17 +112,21 @@ impl Resources {
             // The preflight's refusal (`preflight::check_msaa`), for a technique changed later.
             bail!("--msaa {}: {} shades once per pixel (it has no per-sample edge pass)", s.msaa, s.technique.name());
         }
-        if let Some(sh) = self.shadows.as_ref().filter(|_| !s.technique.description().shadows) {
-            bail!("{}", no_shadows(s.technique, sh.casters(), self.lights_view.len()));
+        if let Some(sh) = &self.shadows {
+            refuse_shadows(s.technique.description(), sh.casters(), self.lights_view.len())?;
         }
         s.technique.create(gpu, &self.inputs())
     }
 }
 
-/// The refusal of a technique that renders no shadows.
-fn no_shadows(t: Technique, casters: usize, lights: usize) -> String {
+/// Refuses, in one line naming the registered techniques that render shadows, a technique
+/// described by `d` that renders none where `casters` of the frame's `lights` cast them.
+fn refuse_shadows(d: &Description, casters: usize, lights: usize) -> Result<()> {
+    if casters == 0 || d.shadows {
+        return Ok(());
+    }
     let with: Vec<&str> = Technique::ALL.iter().filter(|t| t.description().shadows).map(|t| t.name()).collect();
-    format!("{casters} of {lights} lights cast shadows, but {} renders no shadows (techniques that do: {})", t.name(), with.join(", "))
+    bail!("{casters} of {lights} lights cast shadows, but {} renders no shadows (techniques that do: {})", d.name, with.join(", "))
 }
 
 /// Refuses, in one line, scenes with shadow-casting lights that the technique or the shadow
@@ -134,9 +138,7 @@ pub fn check_shadow_scene(scene: &SceneInput<'_>, s: &Settings) -> Result<()> {
         return Ok(());
     }
     let n = scene.lights.len();
-    if !s.technique.description().shadows {
-        bail!("{}", no_shadows(s.technique, casters, n));
-    }
+    refuse_shadows(s.technique.description(), casters, n)?;
     super::shadow_maps::check_resolution(s.shadow.resolution)?;
     super::shadow_maps::check_casters(casters)?;
     if s.msaa > 1 {
@@ -575,4 +577,27 @@ fn check_light_count(gpu: &Gpu, lights: usize) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every registered technique renders shadows, so no frame reaches the refusal; a technique
+    /// registered without them must still be refused in one line that names it and the ones
+    /// that do, and only where a light casts shadows.
+    #[test]
+    fn a_technique_without_shadows_is_refused_in_one_line() {
+        let without = Description { name: "no-shadows", shadows: false, ..*Technique::ALL[0].description() };
+        let e = refuse_shadows(&without, 3, 10).expect_err("refused").to_string();
+        assert!(!e.contains('\n'), "one line: {e}");
+        assert!(e.starts_with("3 of 10 lights cast shadows, but no-shadows renders no shadows (techniques that do: "), "{e}");
+        for t in Technique::ALL.iter().filter(|t| t.description().shadows) {
+            assert!(e.contains(t.name()), "{e} names {}", t.name());
+        }
+        refuse_shadows(&without, 0, 10).expect("no casters: nothing to refuse");
+        for t in Technique::ALL {
+            assert_eq!(refuse_shadows(t.description(), 3, 10).is_ok(), t.description().shadows, "{}", t.name());
+        }
+    }
 }
