@@ -47,8 +47,9 @@ pub const ENTRY_WORDS: u32 = 2;
 /// vertex, first instance), the entries the cull counted ([`ARGS_COUNTED`]), then a
 /// `VkDispatchIndirectCommand` of one workgroup per written entry ([`ARGS_DISPATCH`], for
 /// `shadow_raster`), the faces with receivers ([`ARGS_FACES`]), the atlas's level histogram,
-/// shift and texels taken (`shadow_atlas::ARGS_LEVELS`, `ARGS_SHIFT`, `ARGS_USED`).
-pub const ARGS_WORDS: u32 = crate::shadow_atlas::ARGS_USED as u32 + 1;
+/// shift, texels taken, layout and page histogram (`shadow_atlas::ARGS_LEVELS`, `ARGS_SHIFT`,
+/// `ARGS_USED`, `ARGS_PAGED`, `ARGS_PAGES`).
+pub const ARGS_WORDS: u32 = crate::shadow_atlas::ARGS_END as u32;
 /// Word of the arguments that counts entries (written or not).
 pub const ARGS_COUNTED: usize = 4;
 /// First word of the compute raster's dispatch arguments.
@@ -153,7 +154,7 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     let angle = crate::shadow::cone_angle(cos_outer);
     let mut f = 0;
     while f < FACES {
-        let side = crate::shadow::face_entry(slots, c * FACES + f).1;
+        let side = crate::shadow::face_entry(slots, c * FACES + f).res;
         if mask & (1 << f) != 0 && side != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, angle, side) {
             let slot = counted.fetch_add(1);
             if slot < p.capacity {
@@ -302,14 +303,16 @@ pub fn shadow_batch_vs(
     out_offset: &mut Vec3,
     #[spirv(flat)] out_base: &mut u32,
     #[spirv(flat)] out_res: &mut u32,
+    #[spirv(flat)] out_pages: &mut glam::UVec2,
     #[spirv(flat)] out_radius: &mut f32,
 ) {
     let (clip, d, map, radius) = batch_vertex(vertex_index as u32, positions, indices, Mat4::from_cols_array_2d(&camera.view), casters, batches, entries);
-    let (base, res) = crate::shadow::face_entry(slots, map);
-    *out_position = crate::shadow::face_area_clip(clip, res, p.res);
+    let face = crate::shadow::face_entry(slots, map);
+    *out_position = crate::shadow::face_area_clip(clip, face.res, p.res);
     *out_offset = d;
-    *out_base = base;
-    *out_res = res;
+    *out_base = face.base;
+    *out_res = face.res;
+    *out_pages = glam::UVec2::new(face.pages[0], face.pages[1]);
     *out_radius = radius;
 }
 

@@ -103,7 +103,7 @@ fn culled_batches_draw_every_triangle_a_face_sees() {
     assert_eq!(casters.len() as u32, CASTER_WORDS * lights.len() as u32);
     // The face table: every face of 7 casters (one past the last) at 64² texels.
     const SIDE: u32 = 64;
-    let slots: Vec<u32> = [vec![SIDE, 0, SHADOW_HEADER_WORDS, 0], (0..7 * FACES).flat_map(|m| [m * SIDE * SIDE, SIDE]).collect()].concat();
+    let slots: Vec<u32> = [vec![SIDE, 0, SHADOW_HEADER_WORDS, 0], (0..7 * FACES).flat_map(|m| [m * SIDE * SIDE, SIDE, u32::MAX, u32::MAX]).collect()].concat();
     let run_with = |capacity: u32, casters: &[f32]| {
         let p = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity, pad: 0 };
         let mut entries = vec![u32::MAX; (ENTRY_WORDS * capacity) as usize];
