@@ -145,28 +145,6 @@ impl AtomicMax for u32 {
     }
 }
 
-/// A word whose bits can be set atomically (`OpAtomicOr`, device scope, relaxed, on the GPU;
-/// plain off the GPU).
-pub trait AtomicOr {
-    fn fetch_or(&mut self, v: u32) -> u32;
-}
-
-impl AtomicOr for u32 {
-    #[inline]
-    fn fetch_or(&mut self, v: u32) -> u32 {
-        #[cfg(target_arch = "spirv")]
-        unsafe {
-            spirv_std::arch::atomic_or::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(self, v)
-        }
-        #[cfg(not(target_arch = "spirv"))]
-        {
-            let old = *self;
-            *self = old | v;
-            old
-        }
-    }
-}
-
 /// Subgroup-aggregated reservation: every lane asks for `n` consecutive slots of `counter` and
 /// gets the first. A ballot of the lanes that want any elects the lowest as leader; an inclusive
 /// scan of `n` over the subgroup gives each lane its offset and the total; the leader alone does

@@ -1,8 +1,7 @@
 //! Cube shadow maps: the shadows of the lights that cast them (`cast_shadows`), six faces per
 //! shadow-casting light in the frame's view space, each face at the resolution its receivers
-//! need, and of its 8 × 8 pages only those its receivers look up, in one shared atlas
-//! (`shadow_atlas`: Olsson et al.'s virtual cube shadow maps; [`FaceMap`]: a face's pages and
-//! its page table).
+//! need in one shared atlas (`shadow_atlas`: Olsson et al.'s virtual cube shadow maps, with a
+//! whole face as the unit of allocation).
 //!
 //! Steps (host: `render/shadow_maps.rs`):
 //! 1. **Clear** every texel of the atlas to [`NO_OCCLUDER`].
@@ -47,8 +46,8 @@
 //! (`shadow_tests.rs`), and a contact shadow starts at most about `NORMAL_OFFSET_TEXELS + 1`
 //! texels late.
 //!
-//! **Memory:** the atlas (4 B per texel; `res² · 4` B per whole face in it: 4 KiB at 32, 256 KiB
-//! at 256; `⌈res/8⌉² · 4` B per page of a paged face), [`SHADOW_HEADER_WORDS`] + 1 word per light (the slots), [`FACE_WORDS`] words per caster
+//! **Memory:** the atlas (4 B per texel; `res² · 4` B per face in it: 4 KiB at 32, 256 KiB at
+//! 256), [`SHADOW_HEADER_WORDS`] + 1 word per light (the slots), [`FACE_WORDS`] words per caster
 //! face (the face table), 32 B per caster (its record).
 use crate::layout::PointLight;
 use glam::{Vec3, Vec4};
@@ -68,19 +67,9 @@ pub const NO_SHADOW: u32 = u32::MAX;
 pub const SHADOW_HEADER_WORDS: u32 = 4;
 /// Header word holding the first word of the face table.
 pub const HEADER_TABLE: usize = 2;
-/// Words of a face's entry in the face table (`shadow_atlas`): its first texel in the atlas, its
-/// texels per side (0: no pixel of the frame looks it up, so it holds no texel) and its page
-/// mask (two words, [`FaceMap`]).
-pub const FACE_WORDS: u32 = 4;
-/// Pages across a face (and down): a face is `PAGE_GRID × PAGE_GRID` pages, each an equal part
-/// of the face's `[−1, 1]²`, whatever its side ([`FaceMap`]).
-pub const PAGE_GRID: u32 = 8;
-/// Pages of a face: one bit each in a face's two mask words.
-pub const FACE_PAGES: u32 = PAGE_GRID * PAGE_GRID;
-/// The mask of a face with every page (stored whole, row-major).
-pub const ALL_PAGES: [u32; 2] = [u32::MAX, u32::MAX];
-/// The address of a texel in a page no receiver asked for ([`FaceMap::texel`]).
-pub const NO_TEXEL: u32 = u32::MAX;
+/// Words of a face's entry in the face table (`shadow_atlas`): its first texel in the atlas and
+/// its texels per side (0: no pixel of the frame looks it up, so it holds no texel).
+pub const FACE_WORDS: u32 = 2;
 /// One texel per lookup (the nearest).
 pub const SHADOW_FILTER_NEAREST: u32 = 0;
 /// Four texels per lookup, weighted bilinearly (2 × 2 percentage-closer filtering).
@@ -286,87 +275,12 @@ impl Shadowing for CubeShadows<'_> {
     }
 }
 
-/// A face of the atlas: `res × res` texels from texel `base`, in the pages of `pages` (Olsson et
-/// al. 2014, §4.2: a virtual shadow map of which only the pages receivers look up are backed by
-/// the physical atlas).
-///
-/// **Pages.** The face is cut into [`PAGE_GRID`]² pages, page `(i, j)` bit `8j + i` of the mask
-/// (`pages[0]` rows 0–3, `pages[1]` rows 4–7), each holding the texels `(x, y)` with
-/// `⌊8x / res⌋ = i`, `⌊8y / res⌋ = j`: the same eighth of the face's `[−1, 1]²` at every side, so
-/// the receivers mark pages before the atlas settles the face's side (`shadow_receivers`). A
-/// page spans at most `span = ⌈res / 8⌉` texels per side and takes `span²` texels of the atlas.
-///
-/// **Page table.** The mask is the page table: a present page's place is its rank among the
-/// face's present pages (the set bits below its own), `base + rank · span²`, its texels row-major
-/// inside it. A face with every page ([`ALL_PAGES`]: the atlas is short, or every page was
-/// asked) is stored row-major, `res²` texels: the layout of a face without pages.
-///
-/// ```text
-///  res = 32, span = 4          the face's mask (bit 8j + i)       atlas from base
-///  ┌──┬──┬──┬──┬──┬──┬──┬──┐   j=0  0 0 0 0 0 0 0 0              ┌────────┬────────┬───
-///  │  │  │  │  │  │  │  │  │   j=1  0 0 1 1 0 0 0 0   pages →    │ (2,1)  │ (3,1)  │ (2,2) …
-///  ├──┼──┼──┼──┼──┼──┼──┼──┤   j=2  0 0 1 1 1 0 0 0   in rank    │ 16 tx  │ 16 tx  │
-///  …  8 × 8 pages of 4 × 4 texels    …                           └────────┴────────┴───
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FaceMap {
-    pub base: u32,
-    pub res: u32,
-    pub pages: [u32; 2],
-}
-
-impl FaceMap {
-    /// Whether the face holds every page, stored row-major.
-    #[inline]
-    pub fn whole(&self) -> bool {
-        self.pages[0] == u32::MAX && self.pages[1] == u32::MAX
-    }
-
-    /// The atlas index of texel `(x, y)` (both `< res`), or [`NO_TEXEL`] in a page the face does
-    /// not hold.
-    #[inline]
-    pub fn texel(&self, x: u32, y: u32) -> u32 {
-        if self.whole() {
-            return self.base + y * self.res + x;
-        }
-        let (i, j) = (PAGE_GRID * x / self.res, PAGE_GRID * y / self.res);
-        let page = PAGE_GRID * j + i;
-        let (word, bit) = ((page / 32) as usize, page % 32);
-        if self.pages[word] & (1 << bit) == 0 {
-            return NO_TEXEL;
-        }
-        let below = (self.pages[word] & ((1 << bit) - 1)).count_ones() + if word == 1 { self.pages[0].count_ones() } else { 0 };
-        let span = page_span(self.res);
-        // The page's first texel column and row: `⌈i · res / 8⌉`.
-        let (x0, y0) = ((i * self.res).div_ceil(PAGE_GRID), (j * self.res).div_ceil(PAGE_GRID));
-        self.base + below * span * span + (y - y0) * span + (x - x0)
-    }
-}
-
-/// Texels per side that a page of a face of side `res` spans at most: `⌈res / 8⌉`.
+/// `(first texel, texels per side)` of map `map` (`slot · 6 + face`) in the face table of `slots`
+/// (side 0: the face holds no texel).
 #[inline]
-pub fn page_span(res: u32) -> u32 {
-    res.div_ceil(PAGE_GRID)
-}
-
-/// Texels of the atlas a face of side `res` with page mask `pages` takes: `res²` whole
-/// ([`FaceMap::whole`]), else `span²` per present page.
-#[inline]
-pub fn face_texels(res: u32, pages: [u32; 2]) -> u32 {
-    if pages[0] == u32::MAX && pages[1] == u32::MAX {
-        res * res
-    } else {
-        let span = page_span(res);
-        (pages[0].count_ones() + pages[1].count_ones()) * span * span
-    }
-}
-
-/// The face table's entry of map `map` (`slot · 6 + face`) in `slots` (side 0: the face holds no
-/// texel).
-#[inline]
-pub fn face_entry(slots: &[u32], map: u32) -> FaceMap {
+pub fn face_entry(slots: &[u32], map: u32) -> (u32, u32) {
     let w = (slots[HEADER_TABLE] + map * FACE_WORDS) as usize;
-    FaceMap { base: slots[w], res: slots[w + 1], pages: [slots[w + 2], slots[w + 3]] }
+    (slots[w], slots[w + 1])
 }
 
 /// [`CubeShadows::visibility`] of the map in slot `slot` with `filter`, the module docs' bias
@@ -380,59 +294,48 @@ pub fn face_entry(slots: &[u32], map: u32) -> FaceMap {
 pub fn cube_visibility(maps: &[u32], slots: &[u32], slot: u32, filter: u32, light: Vec3, frame: &CubeFrame, pos: Vec3, normal: Vec3) -> f32 {
     let to_light = light - pos;
     let at = cube_face(frame.local(-to_light));
-    let own = face_entry(slots, slot * FACES + at);
-    if own.res == 0 {
+    let (base_at, res_at) = face_entry(slots, slot * FACES + at);
+    if res_at == 0 {
         return 1.0;
     }
-    let texel = 2.0 * to_light.length() / own.res as f32;
+    let texel = 2.0 * to_light.length() / res_at as f32;
     let n = if normal.dot(to_light) < 0.0 { -normal } else { normal };
     let d = pos + n * (NORMAL_OFFSET_TEXELS * texel) - light;
     let reach = d.length() - DEPTH_BIAS_TEXELS * texel;
     let d = frame.local(d);
     let f = cube_face(d);
-    let face = face_entry(slots, slot * FACES + f);
-    // One lookup either way (one copy of it in every shading kernel).
-    let (face, f) = if face.res == 0 { (own, at) } else { (face, f) };
-    face_visibility(maps, &face, filter, d, f, reach)
+    let (base, res) = face_entry(slots, slot * FACES + f);
+    if res == 0 {
+        return face_visibility(maps, base_at, res_at, filter, d, at, reach);
+    }
+    face_visibility(maps, base, res, filter, d, f, reach)
 }
 
-/// The lookup of direction `d` (in the cube's axes, [`CubeFrame::local`]) on face `f` of the
-/// atlas `maps` ([`FaceMap`]): lit where the stored distance is at least `reach`, one texel or
-/// four bilinearly weighted.
+/// The lookup of direction `d` (in the cube's axes, [`CubeFrame::local`]) on face `f` (`res × res` texels from texel `base` of `maps`): lit
+/// where the stored distance is at least `reach`, one texel or four bilinearly weighted.
 #[inline]
-pub fn face_visibility(maps: &[u32], face: &FaceMap, filter: u32, d: Vec3, f: u32, reach: f32) -> f32 {
-    let (x, y) = face_texel(d, f, face.res);
-    // Nearest: the one texel under `(x, y)`, weight 1. Bilinear: the four around it. One loop
-    // over the taps, so the texel's address through the face's pages is compiled once.
-    let (taps, (ix, iy), (wx, wy)) = if filter == SHADOW_FILTER_BILINEAR {
+pub fn face_visibility(maps: &[u32], base: u32, res: u32, filter: u32, d: Vec3, f: u32, reach: f32) -> f32 {
+    let (x, y) = face_texel(d, f, res);
+    if filter == SHADOW_FILTER_BILINEAR {
         let (fx, fy) = (x - 0.5, y - 0.5);
         let (ix, iy) = (floor(fx), floor(fy));
-        (4, (ix, iy), (fx - ix as f32, fy - iy as f32))
+        let (wx, wy) = (fx - ix as f32, fy - iy as f32);
+        let top = texel_lit(maps, base, res, ix, iy, reach) * (1.0 - wx) + texel_lit(maps, base, res, ix + 1, iy, reach) * wx;
+        let bottom = texel_lit(maps, base, res, ix, iy + 1, reach) * (1.0 - wx) + texel_lit(maps, base, res, ix + 1, iy + 1, reach) * wx;
+        top * (1.0 - wy) + bottom * wy
     } else {
-        (1, (floor(x), floor(y)), (0.0, 0.0))
-    };
-    let mut lit = [0.0f32; 4];
-    let mut k = 0;
-    while k < taps {
-        lit[k] = texel_lit(maps, face, ix + (k & 1) as i32, iy + (k >> 1) as i32, reach);
-        k += 1;
-    }
-    if taps == 4 {
-        (lit[0] * (1.0 - wx) + lit[1] * wx) * (1.0 - wy) + (lit[2] * (1.0 - wx) + lit[3] * wx) * wy
-    } else {
-        lit[0]
+        texel_lit(maps, base, res, floor(x), floor(y), reach)
     }
 }
 
-/// 1 where texel `(tx, ty)` (clamped to the face) of `face` stores a distance of at least
-/// `reach`, else 0; 1 in a page the face does not hold (no receiver the light reaches looks one
-/// up: the receivers' pages hold every lookup of their tiles, `shadow_receivers`). (A function,
-/// not a closure: rust-gpu cannot legalise a closure that captures locals by reference.)
+/// 1 where texel `(tx, ty)` (clamped to the face) of the face map at `base` stores a distance of
+/// at least `reach`, else 0. (A function, not a closure: rust-gpu cannot legalise a closure that
+/// captures locals by reference.)
 #[inline]
-fn texel_lit(maps: &[u32], face: &FaceMap, tx: i32, ty: i32, reach: f32) -> f32 {
-    let last = face.res as i32 - 1;
-    let at = face.texel(clamp(tx, last), clamp(ty, last));
-    if at == NO_TEXEL || reach <= f32::from_bits(maps[at as usize]) {
+fn texel_lit(maps: &[u32], base: u32, res: u32, tx: i32, ty: i32, reach: f32) -> f32 {
+    let last = res as i32 - 1;
+    let (cx, cy) = (clamp(tx, last), clamp(ty, last));
+    if reach <= f32::from_bits(maps[(base + cy * res + cx) as usize]) {
         1.0
     } else {
         0.0
@@ -490,10 +393,9 @@ pub struct ShadowParams {
 }
 const _: () = assert!(core::mem::size_of::<ShadowParams>() == 16);
 
-/// Step 2, fragment stage: keeps the nearest distance at texel `⌊frag.xy⌋` of the face
-/// ([`FaceMap`]: `res × res` texels from `base` in the pages of its mask; within the caster's
-/// radius; fragments past the face's corner of the render area lie outside its pyramid, and
-/// fragments in pages the face does not hold, store nothing).
+/// Step 2, fragment stage: keeps the nearest distance at texel `⌊frag.xy⌋` of the face whose
+/// `res × res` texels start at `base` (within the caster's radius; fragments past the face's
+/// corner of the render area lie outside its pyramid and store nothing).
 #[cfg(feature = "graphics")]
 #[spirv(fragment)]
 pub fn shadow_distance_fs(
@@ -501,17 +403,13 @@ pub fn shadow_distance_fs(
     in_offset: Vec3,
     #[spirv(flat)] in_base: u32,
     #[spirv(flat)] in_res: u32,
-    #[spirv(flat)] in_pages: glam::UVec2,
     #[spirv(flat)] in_radius: f32,
     #[spirv(storage_buffer, descriptor_set = 0, binding = 7)] maps: &mut [u32],
 ) {
     let distance = in_offset.length();
     let (x, y) = (frag.x as u32, frag.y as u32);
     if distance <= in_radius && x < in_res && y < in_res {
-        let at = FaceMap { base: in_base, res: in_res, pages: [in_pages.x, in_pages.y] }.texel(x, y);
-        if at != NO_TEXEL {
-            crate::fragment_atomics::atomic_min(&mut maps[at as usize], distance.to_bits());
-        }
+        crate::fragment_atomics::atomic_min(&mut maps[(in_base + y * in_res + x) as usize], distance.to_bits());
     }
 }
 

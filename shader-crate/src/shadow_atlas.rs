@@ -1,24 +1,19 @@
 //! The shadow atlas and its face table: each cube face of a shadow-casting light gets the
-//! resolution its receivers need and, of its 8 × 8 pages, those its receivers look up, in one
-//! shared atlas, every frame (Olsson et al., "More Efficient Virtual Shadow Maps for Many
-//! Lights", i3D 2014, §4.1–4.2: per-face resolution from the projected size of the receivers,
-//! virtual pages backed only where needed, a physical pool shared by all lights). The page table
-//! of a face is its 64-bit page mask: a page's place is its rank among the face's pages
-//! (`shadow::FaceMap`).
+//! resolution its receivers need and a place in one shared atlas, every frame (Olsson et al.,
+//! "More Efficient Virtual Shadow Maps for Many Lights", i3D 2014, §4.1–4.2: per-face resolution
+//! from the projected size of the receivers, a physical pool shared by all lights). The
+//! allocation unit is a whole face (no sparse pages inside a face).
 //!
 //! Steps (host: `render/shadow_maps.rs`):
-//! 1. **Levels and pages** (`shadow_receivers`, while it finds the faces with receivers): each
-//!    receiver tile asks its faces for [`receiver_level`] — the power of two of texels per face
-//!    side at which a texel at the face's centre spans at most `1 /` [`TEXELS_PER_PIXEL`] of the
-//!    tile's nearest pixel — and each face keeps the largest asked (an atomic maximum; 0: no
-//!    receiver) and the pages the tile's lookups read (an atomic or).
-//! 2. **Histogram** ([`shadow_face_levels`], an invocation per face): the faces and their pages
-//!    counted per level.
+//! 1. **Levels** (`shadow_receivers`, while it finds the faces with receivers): each receiver
+//!    tile asks its faces for [`receiver_level`] — the power of two of texels per face side at
+//!    which a texel at the face's centre spans at most `1 /` [`TEXELS_PER_PIXEL`] of the tile's
+//!    nearest pixel — and each face keeps the largest asked (an atomic maximum; 0: no receiver).
+//! 2. **Histogram** ([`shadow_face_levels`], an invocation per face): the faces counted per level.
 //! 3. **Allocation** ([`shadow_face_alloc`], an invocation per face): every invocation finds the
-//!    same [`atlas_layout`] from the histograms — the receivers' pages at the sides asked where
-//!    they fit, else whole faces with the fewest halvings of every side that fit ([`atlas_shift`])
-//!    — and takes its face's texels (`shadow::face_texels`) from the atlas's counter; the face
-//!    table holds `(first texel, side, page mask)` per face ([`crate::shadow::face_entry`]).
+//!    same [`atlas_shift`] from the histogram — the fewest halvings of every face's side that
+//!    fit all faces in the atlas — and takes `side²` texels from the atlas's counter for its face;
+//!    the face table holds `(first texel, side)` per face ([`crate::shadow::face_entry`]).
 //!
 //! **Bounded memory, nothing dropped.** The atlas holds [`MIN_SIDE`]² texels for every face of
 //! every caster at least (the host sizes it so), so the shift always fits every face that has a
@@ -29,11 +24,9 @@
 //! not be a power of two) and at least [`MIN_SIDE`] (or the cap, where smaller): [`face_side`].
 //!
 //! **Memory:** the atlas (4 B per texel), [`FACE_WORDS`](crate::shadow::FACE_WORDS) words per
-//! face of the table, the arguments' two histograms ([`ARGS_LEVELS`], [`ARGS_PAGES`]).
+//! face of the table, [`ARGS_LEVELS`]' counters.
 #[cfg(feature = "compute")]
-use crate::shadow::{face_texels, ALL_PAGES, FACE_WORDS, HEADER_TABLE};
-#[cfg(feature = "compute")]
-use crate::shadow_receivers::NEEDED_WORDS;
+use crate::shadow::{FACE_WORDS, HEADER_TABLE};
 use glam::Vec3;
 #[cfg(feature = "compute")]
 use spirv_std::spirv;
@@ -52,13 +45,6 @@ pub const ARGS_LEVELS: usize = 9;
 pub const ARGS_SHIFT: usize = ARGS_LEVELS + LEVELS as usize;
 /// Word of the arguments holding the atlas's texels taken.
 pub const ARGS_USED: usize = ARGS_SHIFT + 1;
-/// Word of the arguments holding 1 where the frame's faces keep only their receivers' pages, 0
-/// where every face is kept whole ([`atlas_layout`]).
-pub const ARGS_PAGED: usize = ARGS_USED + 1;
-/// First word of the page histogram: the receivers' pages of the faces of each level.
-pub const ARGS_PAGES: usize = ARGS_PAGED + 1;
-/// Words of the arguments up to the page histogram's end.
-pub const ARGS_END: usize = ARGS_PAGES + LEVELS as usize;
 /// Invocations of a workgroup of steps 2 and 3.
 pub const ATLAS_WORKGROUP: u32 = 64;
 
@@ -133,30 +119,8 @@ pub fn face_side(k: u32, shift: u32, cap: u32) -> u32 {
     }
 }
 
-/// Step 3's layout: `(0, true)` where every face's receivers' pages, counted per level in
-/// `args[ARGS_PAGES..]` at `span²` texels each (`shadow::page_span` of the face's side; a face
-/// of every page takes `side² ≤ 64 · span²`), fit `texels` at the sides asked; else
-/// `(atlas_shift, false)`: every face whole, as few halvings of every side as fit. (Paged faces
-/// at lower resolutions would need their pages marked with the longer lookup offsets of those
-/// sides: a short atlas keeps whole faces, so every lookup finds its texels.)
-#[inline]
-pub fn atlas_layout(args: &[u32], cap: u32, texels: u32) -> (u32, bool) {
-    let mut need = 0u64;
-    let mut k = 1;
-    while k < LEVELS {
-        let span = crate::shadow::page_span(face_side(k, 0, cap)) as u64;
-        need += args[ARGS_PAGES + k as usize] as u64 * span * span;
-        k += 1;
-    }
-    if need <= texels as u64 {
-        (0, true)
-    } else {
-        (atlas_shift(args, cap, texels), false)
-    }
-}
-
-/// The shift of whole faces: the fewest halvings (at most `LEVELS − 1`) after which the faces
-/// counted per level in `args[ARGS_LEVELS..]` fit `texels`. The host's atlas holds every face at
+/// Step 3's shift: the fewest halvings (at most `LEVELS − 1`) after which the faces counted per
+/// level in `levels[ARGS_LEVELS..]` fit `texels`. The host's atlas holds every face at
 /// [`MIN_SIDE`], which the largest shift reaches.
 #[inline]
 pub fn atlas_shift(args: &[u32], cap: u32, texels: u32) -> u32 {
@@ -177,27 +141,24 @@ pub fn atlas_shift(args: &[u32], cap: u32, texels: u32) -> u32 {
     shift
 }
 
-/// Step 3 for face `m`: its first texel (taken from `used`), side and pages (its receivers'
-/// where `paged`, else all) into the face table at `table` of `slots` (`shadow::FaceMap`); zeros
-/// for a face without receivers.
+/// Step 3 for face `m`: its side and first texel (taken from `used`) into the face table at
+/// `table` of `slots`; `(0, 0)` for a face without receivers.
 #[cfg(feature = "compute")]
 #[inline]
-pub fn allocate_face<A: crate::light_lists::AtomicAdd + ?Sized>(m: u32, p: &AtlasParams, (shift, paged): (u32, bool), needed: &[u32], slots: &mut [u32], used: &mut A) {
+pub fn allocate_face<A: crate::light_lists::AtomicAdd + ?Sized>(m: u32, p: &AtlasParams, shift: u32, needed: &[u32], slots: &mut [u32], used: &mut A) {
     if m >= p.faces {
         return;
     }
-    let n = (m * NEEDED_WORDS) as usize;
-    let k = needed[n];
+    let k = needed[m as usize];
     let w = (slots[HEADER_TABLE] + m * FACE_WORDS) as usize;
-    let (side, pages) = if k == 0 {
-        (0, [0, 0])
+    if k == 0 {
+        slots[w] = 0;
+        slots[w + 1] = 0;
     } else {
-        (face_side(k, shift, p.cap), if paged { [needed[n + 1], needed[n + 2]] } else { ALL_PAGES })
-    };
-    slots[w] = if k == 0 { 0 } else { used.fetch_add(face_texels(side, pages)) };
-    slots[w + 1] = side;
-    slots[w + 2] = pages[0];
-    slots[w + 3] = pages[1];
+        let side = face_side(k, shift, p.cap);
+        slots[w] = used.fetch_add(side * side);
+        slots[w + 1] = side;
+    }
 }
 
 /// Step 2: invocation = face (`caster · 6 + face`).
@@ -211,12 +172,9 @@ pub fn shadow_face_levels(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] args: &mut [u32],
 ) {
     let m = id.y * nwg.x * ATLAS_WORKGROUP + id.x;
-    let n = (m * NEEDED_WORDS) as usize;
-    if m < p.faces && needed[n] != 0 {
-        let k = needed[n] as usize;
-        let pages = needed[n + 1].count_ones() + needed[n + 2].count_ones();
+    if m < p.faces && needed[m as usize] != 0 {
+        let k = needed[m as usize] as usize;
         crate::light_lists::AtomicAdd::fetch_add(&mut args[ARGS_LEVELS + k], 1);
-        crate::light_lists::AtomicAdd::fetch_add(&mut args[ARGS_PAGES + k], pages);
         crate::light_lists::AtomicAdd::fetch_add(&mut args[crate::shadow_cull::ARGS_FACES], 1);
     }
 }
@@ -233,12 +191,11 @@ pub fn shadow_face_alloc(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] slots: &mut [u32],
 ) {
     let m = id.y * nwg.x * ATLAS_WORKGROUP + id.x;
-    let layout = atlas_layout(args, p.cap, p.texels);
+    let shift = atlas_shift(args, p.cap, p.texels);
     if m == 0 {
-        args[ARGS_SHIFT] = layout.0;
-        args[ARGS_PAGED] = layout.1 as u32;
+        args[ARGS_SHIFT] = shift;
     }
-    allocate_face(m, p, layout, needed, slots, &mut args[ARGS_USED]);
+    allocate_face(m, p, shift, needed, slots, &mut args[ARGS_USED]);
 }
 
 /// Typed handles (host side).

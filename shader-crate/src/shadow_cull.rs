@@ -47,9 +47,8 @@ pub const ENTRY_WORDS: u32 = 2;
 /// vertex, first instance), the entries the cull counted ([`ARGS_COUNTED`]), then a
 /// `VkDispatchIndirectCommand` of one workgroup per written entry ([`ARGS_DISPATCH`], for
 /// `shadow_raster`), the faces with receivers ([`ARGS_FACES`]), the atlas's level histogram,
-/// shift, texels taken, layout and page histogram (`shadow_atlas::ARGS_LEVELS`, `ARGS_SHIFT`,
-/// `ARGS_USED`, `ARGS_PAGED`, `ARGS_PAGES`).
-pub const ARGS_WORDS: u32 = crate::shadow_atlas::ARGS_END as u32;
+/// shift and texels taken (`shadow_atlas::ARGS_LEVELS`, `ARGS_SHIFT`, `ARGS_USED`).
+pub const ARGS_WORDS: u32 = crate::shadow_atlas::ARGS_USED as u32 + 1;
 /// Word of the arguments that counts entries (written or not).
 pub const ARGS_COUNTED: usize = 4;
 /// First word of the compute raster's dispatch arguments.
@@ -132,27 +131,11 @@ pub fn batch_meets_cone(d: Vec3, r: f32, radius: f32, axis: Vec3, angle: Option<
     }
 }
 
-/// Whether a batch whose sphere lies at `local` from the light (the cube's axes), radius `r`, may
-/// write a texel of a page `face` (face `f`) holds: always for a whole face, else where the
-/// pages of its sphere's projection (`shadow_receivers::sphere_pages`, widened by one texel: a
-/// texel whose centre lies in one eighth of a face of a side that is not a multiple of 8 may
-/// belong to the page before) meet the face's. A texel is written only where its centre's ray
-/// meets a triangle inside the face's pyramid, so inside the sphere's part there.
-#[inline]
-pub fn batch_meets_pages(local: Vec3, r: f32, f: u32, face: &crate::shadow::FaceMap) -> bool {
-    if face.whole() {
-        return true;
-    }
-    let pages = crate::shadow_receivers::sphere_pages(local, r, f, 2.0 / face.res as f32);
-    (pages[0] & face.pages[0]) | (pages[1] & face.pages[1]) != 0
-}
-
 /// Step 1 for batch `b` and caster `c` (`casters`: caster records, `shadow::caster_record`;
 /// `view`: the position buffer's space → view space, a rotation; `slots`: the face table,
 /// `shadow::face_entry`, side 0 for a face without receivers): appends an entry per face met
 /// that has receivers (for a spot light, only where the batch meets its cone widened by the
-/// lookup's spread on that face, [`batch_meets_cone`]; on a paged face, only where its sphere
-/// reaches one of the face's pages, [`batch_meets_pages`]).
+/// lookup's spread on that face, [`batch_meets_cone`]).
 #[cfg(feature = "compute")]
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -165,14 +148,13 @@ pub fn cull_batch<A: crate::light_lists::AtomicAdd + ?Sized>(b: u32, c: u32, p: 
     let light = Vec3::new(casters[k], casters[k + 1], casters[k + 2]);
     let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
     let offset = (view * centre.extend(1.0)).truncate() - light;
-    let local = CubeFrame::of_cone(axis, cos_outer).local(offset);
-    let mask = face_mask(local, r, casters[k + 3]);
+    let mask = face_mask(CubeFrame::of_cone(axis, cos_outer).local(offset), r, casters[k + 3]);
     // The cone's half-angle once per batch and caster, its widening per face.
     let angle = crate::shadow::cone_angle(cos_outer);
     let mut f = 0;
     while f < FACES {
-        let face = crate::shadow::face_entry(slots, c * FACES + f);
-        if mask & (1 << f) != 0 && face.res != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, angle, face.res) && batch_meets_pages(local, r, f, &face) {
+        let side = crate::shadow::face_entry(slots, c * FACES + f).1;
+        if mask & (1 << f) != 0 && side != 0 && batch_meets_cone(offset, r, casters[k + 3], axis, angle, side) {
             let slot = counted.fetch_add(1);
             if slot < p.capacity {
                 entries[(slot * ENTRY_WORDS) as usize] = b;
@@ -320,16 +302,14 @@ pub fn shadow_batch_vs(
     out_offset: &mut Vec3,
     #[spirv(flat)] out_base: &mut u32,
     #[spirv(flat)] out_res: &mut u32,
-    #[spirv(flat)] out_pages: &mut glam::UVec2,
     #[spirv(flat)] out_radius: &mut f32,
 ) {
     let (clip, d, map, radius) = batch_vertex(vertex_index as u32, positions, indices, Mat4::from_cols_array_2d(&camera.view), casters, batches, entries);
-    let face = crate::shadow::face_entry(slots, map);
-    *out_position = crate::shadow::face_area_clip(clip, face.res, p.res);
+    let (base, res) = crate::shadow::face_entry(slots, map);
+    *out_position = crate::shadow::face_area_clip(clip, res, p.res);
     *out_offset = d;
-    *out_base = face.base;
-    *out_res = face.res;
-    *out_pages = glam::UVec2::new(face.pages[0], face.pages[1]);
+    *out_base = base;
+    *out_res = res;
     *out_radius = radius;
 }
 

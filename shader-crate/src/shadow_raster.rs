@@ -40,7 +40,7 @@
 //!
 //! **Memory:** [`QUEUE_WORDS`] words of workgroup memory; no buffer of its own.
 use crate::coop::{Coop, SharedU32};
-use crate::shadow::{face_axes, face_entry, FaceMap, CASTER_WORDS, FACES, NO_TEXEL};
+use crate::shadow::{face_axes, face_entry, CASTER_WORDS, FACES};
 use crate::shadow_cull::{triangle_offsets, triangle_outside, ARGS_COUNTED, BATCH_TRIANGLES, BATCH_WORDS, ENTRY_WORDS};
 use glam::{Mat4, Vec3};
 #[cfg(feature = "compute")]
@@ -347,21 +347,17 @@ impl MinStore for &[core::sync::atomic::AtomicU32] {
 }
 
 /// Tests texels `from, from + step, …` of triangle `t`'s box and keeps each covered one's
-/// distance in `face` of `maps` (`shadow::FaceMap`; texels in pages the face does not hold are
-/// skipped).
+/// distance in the face of `res × res` texels from texel `base` of `maps`.
 #[inline]
-fn raster_texels<M: MinStore + ?Sized>(t: &FaceTriangle, from: u32, step: u32, face: &FaceMap, maps: &mut M) {
+fn raster_texels<M: MinStore + ?Sized>(t: &FaceTriangle, from: u32, step: u32, base: u32, res: u32, maps: &mut M) {
     let n = t.texels();
     let w = if n == 0 { 1 } else { t.hi_x - t.lo_x + 1 };
     let mut i = from;
     while i < n {
         let (x, y) = (t.lo_x + i % w, t.lo_y + i / w);
-        let at = face.texel(x, y);
-        if at != NO_TEXEL {
-            let distance = texel_distance(t, x, y, face.res);
-            if distance >= 0.0 {
-                maps.min_at(at, distance.to_bits());
-            }
+        let distance = texel_distance(t, x, y, res);
+        if distance >= 0.0 {
+            maps.min_at(base + y * res + x, distance.to_bits());
         }
         i += step;
     }
@@ -408,21 +404,21 @@ pub fn raster_entry<C: Coop, S: SharedU32 + ?Sized, M: MinStore + ?Sized>(
     }
     c.workgroup_barrier();
     let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
-    let face = face_entry(slots, map);
-    let tri = entry_triangle(t, b, map, face.res, view, positions, indices, casters, batches);
+    let (base, res) = face_entry(slots, map);
+    let tri = entry_triangle(t, b, map, res, view, positions, indices, casters, batches);
     let n = tri.texels();
     if n > SMALL_TEXELS {
         let slot = shared.atomic_add(0, 1);
         shared.store(1 + slot, t);
     } else if n > 0 {
-        raster_texels(&tri, 0, 1, &face, maps);
+        raster_texels(&tri, 0, 1, base, res, maps);
     }
     c.workgroup_barrier();
     let queued = shared.load(0);
     let mut q = 0;
     while q < queued {
-        let big = entry_triangle(shared.load(1 + q), b, map, face.res, view, positions, indices, casters, batches);
-        raster_texels(&big, t, RASTER_WORKGROUP, &face, maps);
+        let big = entry_triangle(shared.load(1 + q), b, map, res, view, positions, indices, casters, batches);
+        raster_texels(&big, t, RASTER_WORKGROUP, base, res, maps);
         q += 1;
     }
 }

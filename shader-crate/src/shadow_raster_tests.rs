@@ -1,6 +1,6 @@
 use super::*;
 use crate::coop::cpu::{run_workgroups, Emulation};
-use crate::shadow::{cube_face, ALL_PAGES, NO_OCCLUDER, SHADOW_HEADER_WORDS};
+use crate::shadow::{cube_face, NO_OCCLUDER, SHADOW_HEADER_WORDS};
 use crate::shadow_cull::tests::batch_words;
 use crate::shadow_cull::{cull_batch, draw_args, ShadowCullParams, ARGS_DISPATCH, ARGS_WORDS};
 use crate::test_support::Rng;
@@ -134,7 +134,7 @@ fn meshes_leave_no_texel_between_their_triangles() {
         let mut map = vec![NO_OCCLUDER; (res * res) as usize];
         for t in &tris {
             let ft = face_triangle(t[0], t[1], t[2], f, res, 10.0);
-            raster_texels(&ft, 0, 1, &FaceMap { base: 0, res, pages: ALL_PAGES }, &mut map[..]);
+            raster_texels(&ft, 0, 1, 0, res, &mut map[..]);
         }
         for y in 0..res {
             for x in 0..res {
@@ -188,16 +188,14 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
         _ => (Vec3::ZERO, crate::shadow::NO_CONE),
     };
     let casters: Vec<f32> = lights.iter().enumerate().flat_map(|(l, (p, r))| [p.x, p.y, p.z, *r, cone(l).0.x, cone(l).0.y, cone(l).0.z, cone(l).1]).collect();
-    // The face table: sides from 5 to 40 texels, whole or some of their pages (`FaceMap`), the
-    // faces one after another in the atlas.
+    // The face table: sides from 5 to 40 texels, the faces one after another in the atlas.
     let maps_n = lights.len() as u32 * FACES;
     let mut slots = vec![40, 0, SHADOW_HEADER_WORDS, 0];
     let mut texels = 0;
     for m in 0..maps_n {
         let side = [24, 8, 5, 40, 16, 33][(m % 6) as usize];
-        let pages = [ALL_PAGES, crate::shadow_receivers::page_rect(1, 5, 2, 7), [0x00ff_00f0, 0x8000_0001]][(m % 3) as usize];
-        slots.extend([texels, side, pages[0], pages[1]]);
-        texels += crate::shadow::face_texels(side, pages);
+        slots.extend([texels, side]);
+        texels += side * side;
     }
     let texels = texels as usize;
     let cull = ShadowCullParams { batches: n_batches, casters: lights.len() as u32, capacity: 1000, pad: 0 };
@@ -218,15 +216,15 @@ fn emulated_kernel_equals_every_texel_of_every_culled_triangle() {
     for e in 0..written {
         let (b, map) = (entries[(e * ENTRY_WORDS) as usize], entries[(e * ENTRY_WORDS + 1) as usize]);
         for k in 0..BATCH_TRIANGLES {
-            let face = face_entry(&slots, map);
-            let t = entry_triangle(k, b, map, face.res, view, &positions, &indices, &casters, &batches);
+            let (base, res) = face_entry(&slots, map);
+            let t = entry_triangle(k, b, map, res, view, &positions, &indices, &casters, &batches);
             match t.texels() {
                 0 => continue,
                 n if n > SMALL_TEXELS => large += 1,
                 _ => small += 1,
             }
-            let whole = FaceTriangle { lo_x: 0, lo_y: 0, hi_x: face.res - 1, hi_y: face.res - 1, ..t };
-            raster_texels(&whole, 0, 1, &face, &mut want[..]);
+            let whole = FaceTriangle { lo_x: 0, lo_y: 0, hi_x: res - 1, hi_y: res - 1, ..t };
+            raster_texels(&whole, 0, 1, base, res, &mut want[..]);
         }
     }
     assert!(large > 20 && small > 200, "{large} large and {small} small triangles");
@@ -285,7 +283,7 @@ fn a_turned_cube_draws_and_looks_up_the_same_shadows() {
     let positions: Vec<f32> = tris.iter().flatten().flat_map(|v| v.to_array()).collect();
     let indices: Vec<u32> = (0..6).collect();
     let batches = batch_words(&positions, 2);
-    let slots: Vec<u32> = [vec![RES, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS + 1, 0, 0], (0..FACES).flat_map(|f| [f * RES * RES, RES, u32::MAX, u32::MAX]).collect()].concat();
+    let slots: Vec<u32> = [vec![RES, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS + 1, 0, 0], (0..FACES).flat_map(|f| [f * RES * RES, RES]).collect()].concat();
     for outer_deg in [30.0f32, 55.0] {
         let cos_outer = outer_deg.to_radians().cos();
         let casters = [light.x, light.y, light.z, 10.0, axis.x, axis.y, axis.z, cos_outer];
@@ -294,7 +292,7 @@ fn a_turned_cube_draws_and_looks_up_the_same_shadows() {
             for k in 0..2 {
                 let tri = entry_triangle(k, 0, f, RES, Mat4::IDENTITY, &positions, &indices, &casters, &batches);
                 let whole = FaceTriangle { lo_x: 0, lo_y: 0, hi_x: RES - 1, hi_y: RES - 1, ..tri };
-                raster_texels(&whole, 0, 1, &FaceMap { base: f * RES * RES, res: RES, pages: ALL_PAGES }, &mut maps[..]);
+                raster_texels(&whole, 0, 1, f * RES * RES, RES, &mut maps[..]);
             }
         }
         let frame = CubeFrame::of_cone(axis, cos_outer);

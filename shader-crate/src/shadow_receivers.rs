@@ -17,22 +17,16 @@
 //!    takes only faces its cone lights, and its cube is turned to its cone,
 //!    `shadow::CubeFrame`: one face for a cone of at most 42°, three up to 70°); each face met keeps the largest resolution level its
 //!    receivers ask
-//!    (`shadow_atlas::receiver_level`) in its word of `needed` (an atomic maximum; 0: none), and
-//!    the pages of the face its lookups read ([`sphere_pages`], `shadow::FaceMap`) in its two page
-//!    words (an atomic or): Olsson et al.'s page marking (§4.2), from the tile's sphere instead
-//!    of each pixel.
+//!    (`shadow_atlas::receiver_level`) in its word of `needed` (an atomic maximum; 0: none).
 //!
 //! **Conservative:** a pixel's lookup direction `pos + n·offset − light` lies within its tile's
 //! widened sphere while its face has at least the side its tile asked (the atlas is not short),
 //! and `face_mask` holds every face a point of the sphere within the light's radius lies in; a
 //! pixel beyond the radius receives no light, so its face does not matter.
 //!
-//! **Pages conservative:** the lookup's texels lie within [`PAGE_MARGIN_TEXELS`] of its
-//! direction's face coordinates, which lie inside the projection of the widened sphere's box.
-//!
-//! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 12 B per caster face.
+//! **Memory:** 32 B per tile (8 160 tiles at 1080p: 261 KB), 4 B per caster face.
 use crate::layout::ClusterGrid;
-use crate::shadow::{cone_angle, sphere_meets_widened_cone, CubeFrame, CASTER_WORDS, CONE_MARGIN, FACES, NORMAL_OFFSET_TEXELS, PAGE_GRID};
+use crate::shadow::{cone_angle, sphere_meets_widened_cone, CubeFrame, CASTER_WORDS, CONE_MARGIN, FACES, NORMAL_OFFSET_TEXELS};
 use crate::shadow_atlas::{face_side, receiver_level};
 use crate::shadow_cull::{face_mask, CULL_MARGIN};
 use glam::Vec3;
@@ -140,28 +134,14 @@ pub fn packed_level(levels: u32, f: u32) -> u32 {
     (levels >> (LEVEL_BITS * f)) & ((1 << LEVEL_BITS) - 1)
 }
 
-/// What a run of tiles asks of a caster's faces ([`receiver_faces`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FaceAsks {
-    /// Each face's largest level, packed [`LEVEL_BITS`] per face (face `f` at bit
-    /// `LEVEL_BITS · f`; 0: no receiver).
-    pub levels: u32,
-    /// Each face's pages (`shadow::FaceMap`), words `2f` and `2f + 1`.
-    pub pages: [u32; 2 * FACES as usize],
-}
-
-/// Words per face of the receivers' asks (`needed`): its level, then its two page words.
-pub const NEEDED_WORDS: u32 = 3;
-
 /// Step 2 for caster `c` and tiles `first..first + TILES_PER_INVOCATION`: the faces of the caster
 /// any of those tiles' receivers look up, each with the largest level one of them asks
-/// (`shadow_atlas::receiver_level`) and the pages their lookups read ([`sphere_pages`]). A sphere
-/// is widened by the lookup's offset on a face of the side its own level gives
-/// ([`lookup_reach`]): the face table gives each face at least that side unless the atlas is
-/// short (`shadow::cube_visibility` then falls back to the receiver's face, and the atlas keeps
-/// every page of every face, `shadow_atlas::atlas_layout`).
+/// (`shadow_atlas::receiver_level`), packed [`LEVEL_BITS`] per face (face `f` at bit
+/// `LEVEL_BITS · f`; 0: no receiver). A sphere is widened by the lookup's offset on a face of the
+/// side its own level gives ([`lookup_reach`]): the face table gives each face at least that side
+/// unless the atlas is short (`shadow::cube_visibility` then falls back to the receiver's face).
 #[inline]
-pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], casters: &[f32]) -> FaceAsks {
+pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], casters: &[f32]) -> u32 {
     let k = (c * CASTER_WORDS) as usize;
     let (light, radius) = (Vec3::new(casters[k], casters[k + 1], casters[k + 2]), casters[k + 3]);
     let (axis, cos_outer) = (Vec3::new(casters[k + 4], casters[k + 5], casters[k + 6]), casters[k + 7]);
@@ -172,7 +152,6 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
     let n = p.tiles_x * p.tiles_y;
     let end = if first + TILES_PER_INVOCATION < n { first + TILES_PER_INVOCATION } else { n };
     let mut levels = 0;
-    let mut pages = [0u32; 2 * FACES as usize];
     let mut t = 2 * first;
     while t < 2 * end {
         // Sphere `t` (two per tile).
@@ -194,87 +173,18 @@ pub fn receiver_faces(p: &ReceiverParams, c: u32, first: u32, tiles: &[f32], cas
                 Some(a) if sphere_meets_widened_cone(d, widened, axis, a, far) => spot_faces(side, local_axis, a),
                 Some(_) => 0,
             };
-            let local = frame.local(d);
-            let mask = if cone != 0 { face_mask(local, widened, radius + CULL_MARGIN * far) & cone } else { 0 };
+            let mask = if cone != 0 { face_mask(frame.local(d), widened, radius + CULL_MARGIN * far) & cone } else { 0 };
             let mut f = 0;
             while f < FACES {
-                if mask & (1 << f) != 0 {
-                    if packed_level(levels, f) < level {
-                        levels = (levels & !(((1 << LEVEL_BITS) - 1) << (LEVEL_BITS * f))) | (level << (LEVEL_BITS * f));
-                    }
-                    let asked = sphere_pages(local, widened, f, PAGE_MARGIN_TEXELS * 2.0 / side as f32);
-                    pages[2 * f as usize] |= asked[0];
-                    pages[2 * f as usize + 1] |= asked[1];
+                if mask & (1 << f) != 0 && packed_level(levels, f) < level {
+                    levels = (levels & !(((1 << LEVEL_BITS) - 1) << (LEVEL_BITS * f))) | (level << (LEVEL_BITS * f));
                 }
                 f += 1;
             }
         }
         t += 1;
     }
-    FaceAsks { levels, pages }
-}
-
-/// Texels by which [`receiver_faces`] widens a sphere's pages on a face of its own side: a
-/// lookup at continuous texel `t` reads texels `⌊t − ½⌋` and `⌊t − ½⌋ + 1` (bilinear; nearest
-/// reads `⌊t⌋`), from `t − 1.5` to `t + 0.5`, and a texel straddling an eighth of the face
-/// (sides not a multiple of 8) belongs to the page of its first column: 2 texels hold both. A face
-/// of a larger side has smaller texels, so the margin holds on the face's final side too.
-pub const PAGE_MARGIN_TEXELS: f32 = 2.0;
-
-/// The pages (`shadow::FaceMap`: `⌊4(u + 1)⌋, ⌊4(v + 1)⌋` for face coordinates `u, v ∈ [−1, 1]`)
-/// of face `f` that the sphere at offset `d` from the light (the cube's axes), of radius `r`,
-/// projects onto, its face coordinates widened by `margin`: the pages of the projection of the
-/// part of the sphere's box `[x ± r] × [y ± r] × [z ± r]` (in the face's right, up and forward
-/// axes) inside the face's pyramid `|x|, |y| ≤ z`, whose points have `z` at least `near`: the
-/// box's least `z`, and its least `|x|` and `|y|`. While `near > 0`, the extreme ratios `x / z`
-/// over `[near, z + r]` lie at corners; where it is not (the box holds the face's axis at the
-/// light), every page.
-#[inline]
-pub fn sphere_pages(d: Vec3, r: f32, f: u32, margin: f32) -> [u32; 2] {
-    let (right, up, forward) = crate::shadow::face_axes(f);
-    let (x, y, z) = (d.dot(right), d.dot(up), d.dot(forward));
-    // The least |a| over [a − r, a + r] (0 where it holds 0).
-    let gap = |a: f32| if a.abs() > r { a.abs() - r } else { 0.0 };
-    let near = (z - r).max(gap(x)).max(gap(y));
-    let far = z + r;
-    if !(near > 0.0) {
-        return crate::shadow::ALL_PAGES;
-    }
-    let lo = |a: f32| (if a < 0.0 { a / near } else { a / far }) - margin;
-    let hi = |a: f32| (if a > 0.0 { a / near } else { a / far }) + margin;
-    page_rect(page_of(lo(x - r)), page_of(hi(x + r)), page_of(lo(y - r)), page_of(hi(y + r)))
-}
-
-/// The page column (or row) of face coordinate `u`: `⌊4(u + 1)⌋` clamped to the face's pages
-/// (NaN: 0).
-#[inline]
-pub fn page_of(u: f32) -> u32 {
-    let t = (u + 1.0) * (0.5 * PAGE_GRID as f32);
-    if t >= (PAGE_GRID - 1) as f32 {
-        PAGE_GRID - 1
-    } else if t > 0.0 {
-        t as u32
-    } else {
-        0
-    }
-}
-
-/// The mask of pages `i0..=i1` × `j0..=j1` (row `j` in bits `8j..8j + 8`).
-#[inline]
-pub fn page_rect(i0: u32, i1: u32, j0: u32, j1: u32) -> [u32; 2] {
-    let row = ((1u32 << (i1 + 1)) - 1) & !((1u32 << i0) - 1);
-    let mut pages = [0u32; 2];
-    let mut j = j0;
-    while j <= j1 {
-        let bits = row << (PAGE_GRID * (j % 4));
-        if j < 4 {
-            pages[0] |= bits;
-        } else {
-            pages[1] |= bits;
-        }
-        j += 1;
-    }
-    pages
+    levels
 }
 
 /// The faces a receiver of a tile whose faces take `side` texels may look up through a spot
@@ -347,6 +257,22 @@ pub fn pyramid_cos(a: Vec3) -> f32 {
 
 
 
+/// `fetch_max` on a storage-buffer word: `OpAtomicUMax` (device scope, relaxed) on the GPU, a
+/// plain maximum off it.
+#[inline]
+pub fn fetch_max(word: &mut u32, v: u32) -> u32 {
+    #[cfg(target_arch = "spirv")]
+    unsafe {
+        spirv_std::arch::atomic_u_max::<u32, { spirv_std::memory::Scope::Device as u32 }, { spirv_std::memory::Semantics::NONE.bits() }>(word, v)
+    }
+    #[cfg(not(target_arch = "spirv"))]
+    {
+        let old = *word;
+        *word = old.max(v);
+        old
+    }
+}
+
 /// Step 1: invocation = tile (linear, `tiles_x` per row).
 #[cfg(feature = "compute")]
 #[spirv(compute(threads(64)))]
@@ -384,20 +310,16 @@ pub fn shadow_receiver_faces(
     #[spirv(storage_buffer, descriptor_set = 0, binding = 1)] casters: &[f32],
     #[spirv(storage_buffer, descriptor_set = 0, binding = 2)] needed: &mut [u32],
 ) {
-    use crate::light_lists::{AtomicMax, AtomicOr};
     let first = id.x * TILES_PER_INVOCATION;
     if first >= p.tiles_x * p.tiles_y || id.y >= p.casters {
         return;
     }
-    let asks = receiver_faces(p, id.y, first, tiles, casters);
+    let levels = receiver_faces(p, id.y, first, tiles, casters);
     let mut f = 0;
     while f < FACES {
-        let level = packed_level(asks.levels, f);
+        let level = packed_level(levels, f);
         if level != 0 {
-            let w = ((id.y * FACES + f) * NEEDED_WORDS) as usize;
-            needed[w].fetch_max(level);
-            needed[w + 1].fetch_or(asks.pages[2 * f as usize]);
-            needed[w + 2].fetch_or(asks.pages[2 * f as usize + 1]);
+            fetch_max(&mut needed[(id.y * FACES + f) as usize], level);
         }
         f += 1;
     }
@@ -411,7 +333,7 @@ pub mod handles {
 
     /// Step 1: depth, tiles.
     pub const SHADOW_RECEIVER_TILES: Kernel<ReceiverParams> = Kernel::new("shadow_receivers::shadow_receiver_tiles", 2, [super::RECEIVER_WORKGROUP, 1, 1], false);
-    /// Step 2: tiles, caster records, the faces' levels and pages.
+    /// Step 2: tiles, caster records, the faces' levels.
     pub const SHADOW_RECEIVER_FACES: Kernel<ReceiverParams> = Kernel::new("shadow_receivers::shadow_receiver_faces", 3, [super::RECEIVER_WORKGROUP, 1, 1], false);
 }
 

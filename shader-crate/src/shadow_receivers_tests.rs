@@ -57,27 +57,16 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
         let tiles = tiles_of(&p, &gb.depth);
         let n_tiles = p.tiles_x * p.tiles_y;
         assert_eq!((p.tiles_x, p.tiles_y), (9, 5));
-        let levels: Vec<u32> = (0..p.casters).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters).levels))).collect();
+        let levels: Vec<u32> = (0..p.casters).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters)))).collect();
         // One run per tile gives the same levels.
         for c in 0..p.casters {
             let single = (0..n_tiles).fold(0, |m, t| {
                 let one = ReceiverParams { tiles_x: 1, tiles_y: t + 1, ..p };
-                merge(m, receiver_faces(&one, c, t, &tiles, &casters).levels)
+                merge(m, receiver_faces(&one, c, t, &tiles, &casters))
             });
             assert_eq!(single, levels[c as usize], "caster {c}");
         }
         let masks: Vec<u32> = levels.iter().map(|&l| mask_of(l)).collect();
-        // Each face's pages, from every run of tiles.
-        let pages: Vec<[u32; 12]> = (0..p.casters)
-            .map(|c| {
-                (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold([0; 12], |mut m, first| {
-                    let asks = receiver_faces(&p, c, first, &tiles, &casters);
-                    m.iter_mut().zip(asks.pages).for_each(|(a, b)| *a |= b);
-                    m
-                })
-            })
-            .collect();
-        let mut texels_read = 0;
         let mut seen = 0;
         for i in 0..(g.width * g.height) {
             let (x, y) = (i % g.width, i / g.width);
@@ -108,17 +97,6 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
                         seen += 1;
                         let f = cube_face(d);
                         assert!(masks[c] & (1 << f) != 0, "res {res}: pixel ({x}, {y}) looks caster {c} up on face {f}, not in its mask {:06b}", masks[c]);
-                        // Every texel either filter reads there lies in a page of the face.
-                        let side = face_side(packed_level(levels[c], f), 0, res);
-                        let (tx, ty) = crate::shadow::face_texel(d, f, side);
-                        let clamp = |t: f32| (t.floor().max(0.0) as u32).min(side - 1);
-                        for (ox, oy) in [(0.0, 0.0), (-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
-                            let (u, v) = (clamp(tx + ox), clamp(ty + oy));
-                            let page = 8 * (8 * v / side) + 8 * u / side;
-                            let bits = pages[c][2 * f as usize + (page / 32) as usize];
-                            texels_read += 1;
-                            assert!(bits & (1 << (page % 32)) != 0, "res {res}: pixel ({x}, {y})'s lookup of caster {c} reads texel ({u}, {v}) of face {f} in page {page}, not among its pages");
-                        }
                     }
                 }
             }
@@ -126,15 +104,7 @@ fn every_lookup_within_the_radius_falls_on_a_needed_face() {
         // A tile of sky has no sphere.
         let sky = (0..n_tiles).filter(|&t| tiles[(t * TILE_WORDS + 3) as usize] < 0.0 && tiles[(t * TILE_WORDS + 7) as usize] < 0.0).count();
         let kept: u32 = masks.iter().map(|m| m.count_ones()).sum();
-        let kept_pages: u32 = pages.iter().flatten().map(|w| w.count_ones()).sum();
-        eprintln!("res {res}: {seen} lookups ({texels_read} texels), {sky} tiles of sky, {kept} of {} faces kept, {kept_pages} of their {} pages", FACES * p.casters, 64 * kept);
-        // Pages only on faces kept; at 256² they leave some of those faces' pages out.
-        for c in 0..p.casters as usize {
-            for f in 0..FACES {
-                assert_eq!(masks[c] & (1 << f) != 0, pages[c][2 * f as usize] | pages[c][2 * f as usize + 1] != 0, "caster {c} face {f}");
-            }
-        }
-        assert!(res < 256 || kept_pages < 64 * kept * 3 / 4, "res {res}: {kept_pages} pages of {kept} faces");
+        eprintln!("res {res}: {seen} lookups, {sky} tiles of sky, {kept} of {} faces kept", FACES * p.casters);
         assert!(seen > 1000 && sky >= 1, "{seen} lookups, {sky} sky tiles");
         // At 8² the normal offset (1.5 texels of a quarter of the distance) widens every sphere
         // past most faces; at 256² the masks cull.
@@ -154,7 +124,7 @@ fn casters_far_from_every_receiver_keep_no_face() {
     let inside = view_position(&g, 5, 5, distance_from_depth(g.near, gb.depth[5 * 40 + 5]));
     let casters = [0.0, 0.0, 500.0, 10.0, 0.0, 0.0, 0.0, NO_CONE, inside.x, inside.y, inside.z, 0.5, 0.0, 0.0, 0.0, NO_CONE];
     let n = p.tiles_x * p.tiles_y;
-    let mask = |c| mask_of((0..n).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters).levels)));
+    let mask = |c| mask_of((0..n).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters))));
     assert_eq!(mask(0), 0);
     assert_eq!(mask(1), 63);
 }
@@ -213,7 +183,7 @@ fn spot_lights_keep_only_the_faces_their_cone_lights() {
     let axis = (centre - light).normalize();
     let cos_outer = 0.3f32.cos();
     let casters = [light.x, light.y, light.z, 40.0, axis.x, axis.y, axis.z, cos_outer, light.x, light.y, light.z, 40.0, 0.0, 0.0, 0.0, NO_CONE];
-    let levels: Vec<u32> = (0..2).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters).levels))).collect();
+    let levels: Vec<u32> = (0..2).map(|c| (0..n_tiles).step_by(TILES_PER_INVOCATION as usize).fold(0, |m, first| merge(m, receiver_faces(&p, c, first, &tiles, &casters)))).collect();
     let (spot, point) = (mask_of(levels[0]), mask_of(levels[1]));
     // The spot light's cube is turned to its cone (`CubeFrame`): a 17° cone on one face.
     let frame = crate::shadow::CubeFrame::of_cone(axis, cos_outer);

@@ -18,7 +18,7 @@ pub(crate) fn uniform_slots(res: u32, filter: u32, slots: &[u32]) -> Vec<u32> {
     s.extend_from_slice(slots);
     let maps = slots.iter().filter(|&&m| m != NO_SHADOW).count() as u32;
     for m in 0..maps * FACES {
-        s.extend([m * res * res, res, u32::MAX, u32::MAX]);
+        s.extend([m * res * res, res]);
     }
     s
 }
@@ -227,7 +227,7 @@ fn faces_of_different_sides_look_up_their_own_texels() {
     let mut slots = vec![64, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS + 1, 0, 0];
     for (f, &side) in sides.iter().enumerate() {
         let whole = cube_map_of(light, side, &hit);
-        slots.extend([atlas.len() as u32, side, u32::MAX, u32::MAX]);
+        slots.extend([atlas.len() as u32, side]);
         atlas.extend_from_slice(&whole[f * (side * side) as usize..(f + 1) * (side * side) as usize]);
     }
     let mut rng = Rng(3);

@@ -5,12 +5,9 @@
 //! 1. the maps cleared to "no occluder" and the draw's arguments to zero;
 //! 2. the faces with receivers (`shaders::shadow_receivers`, [`ShadowFaces::Receivers`]): the
 //!    G-buffer's tiles of 16² pixels as two spheres each, tested against every caster's faces;
-//!    each face the frame's pixels look up keeps the resolution level they ask and the pages of
-//!    its 8 × 8 its lookups read;
-//! 3. the atlas (`shaders::shadow_atlas`): the faces and their pages counted per level, then
-//!    each face given its side and its first texel and pages in the face table: only the pages
-//!    asked where those fit at the sides asked, else every face whole with its side halved as
-//!    often as the atlas needs;
+//!    each face the frame's pixels look up keeps the resolution level they ask;
+//! 3. the atlas (`shaders::shadow_atlas`): the faces counted per level, then each given its side
+//!    (halved as often as the atlas needs) and its first texel in the face table;
 //! 4. the cull kernel: every batch of 64 opaque triangles against every caster's six faces,
 //!    an entry per face with receivers its bounding sphere meets within the light's radius;
 //! 5. the arguments kernel, then every entry's triangles into its face: by default one indirect
@@ -24,14 +21,14 @@
 //! Each face gets the side its receivers ask, at most [`ShadowSettings::resolution`], in one
 //! atlas shared by all casters ([`ShadowSettings::atlas_bytes`]; by default room for every face at
 //! the largest side, within the device's largest storage binding). A frame whose faces ask for
-//! more than the atlas holds keeps whole faces and halves every side until they fit, and
-//! `--stats` and `render` say so ([`ShadowStats::shift`]); no caster or face is dropped.
+//! more than the atlas holds halves every side until they fit, and `--stats` and `render` say so
+//! ([`ShadowStats::shift`]); no caster or face is dropped.
 //!
 //! Memory: the atlas (`shaders::shadow`), 12 B per opaque triangle (its indices in the batches'
 //! order, [`shadow_triangles`]), 32 B per batch (0.5 B per triangle), 8 B per entry
 //! (counted on the host when the lights or the camera move: [`count_entries`], an upper bound
-//! that ignores the receivers), 16 B per caster record, 12 B per caster face of levels and pages
-//! and 16 B of face table, 32 B per 16² pixels of receiver tiles.
+//! that ignores the receivers), 16 B per caster record, 4 B per caster face of levels and 8 B of
+//! face table, 32 B per 16² pixels of receiver tiles.
 use super::gbuffer::{Draw, Geometry};
 use crate::gpu::Gpu;
 use crate::vk::{Attachment, Binding, Buffer, ComputePipeline, Context, GraphicsPipeline, Image, ImageUse, Load, Recorder, TargetFormat, VkResult};
@@ -40,9 +37,9 @@ use glam::{Mat4, Vec3};
 use shaders::layout::PointLight;
 use shaders::shadow_raster::ShadowRasterParams;
 use shaders::shadow::{caster_record, CubeFrame, ShadowParams, CASTER_WORDS, FACES, FACE_WORDS, NO_OCCLUDER, NO_SHADOW, SHADOW_FILTER_BILINEAR, SHADOW_FILTER_NEAREST, SHADOW_HEADER_WORDS};
-use shaders::shadow_atlas::{cap_level, face_side, handles as atlas_handles, AtlasParams, ARGS_LEVELS, ARGS_PAGED, ARGS_PAGES, ARGS_SHIFT, ARGS_USED, LEVELS, MIN_SIDE};
+use shaders::shadow_atlas::{cap_level, handles as atlas_handles, AtlasParams, ARGS_SHIFT, ARGS_USED, MIN_SIDE};
 use shaders::layout::ClusterGrid;
-use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, NEEDED_WORDS, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
+use shaders::shadow_receivers::{handles as receiver_handles, ReceiverParams, RECEIVER_TILE, RECEIVER_WORKGROUP, TILES_PER_INVOCATION, TILE_WORDS};
 use shaders::shadow_cull::{face_mask, handles, ShadowCullParams, ARGS_COUNTED, ARGS_DISPATCH, ARGS_FACES, ARGS_WORDS, BATCH_TRIANGLES, BATCH_WORDS, CULL_MARGIN, CULL_WORKGROUP, ENTRY_WORDS};
 
 /// Texels per face side unless `--shadow-resolution` says otherwise.
@@ -130,14 +127,6 @@ pub struct ShadowStats {
     pub atlas_texels: u32,
     pub atlas_used: u32,
     pub shift: u32,
-    /// Whether the last frame's faces kept only the pages their receivers look up (false: every
-    /// face whole, as a short atlas or [`ShadowFaces::All`] keeps them), and the pages those
-    /// faces asked (of 64 per face).
-    pub paged: bool,
-    pub pages: u32,
-    /// Texels the last frame's faces would take whole at the sides they asked (what the atlas
-    /// held before faces had pages; `atlas_used` against it is what the pages saved).
-    pub whole_texels: u64,
     /// Batches of triangles the batches' cull sent to faces in the last frame, and the triangles
     /// of the scene's opaque draws per face at most (batches × 64 × 6 per caster).
     pub entries: u32,
@@ -163,21 +152,17 @@ pub struct ShadowMaps {
     args_pipe: ComputePipeline<ShadowCullParams>,
     /// The receivers' tiles and faces (`None`: every face, [`ShadowFaces::All`]).
     receivers: Option<Receivers>,
-    /// Per caster face, the level its receivers ask and its pages (`shaders::shadow_atlas`,
-    /// `NEEDED_WORDS` each; 0: none; every face whole at the largest side with
-    /// [`ShadowFaces::All`]).
+    /// Per caster face, the level its receivers ask (`shaders::shadow_atlas`; 0: none; every
+    /// face at the largest side with [`ShadowFaces::All`]).
     needed: Buffer,
     /// What writes the entries' triangles: the compute rasteriser, or the draw and its render area
     /// (the largest side squared, never tested or written).
     writer: Writer,
     settings: ShadowSettings,
-    /// Texels of the atlas, and the last frame's texels taken, shift, layout and pages asked.
+    /// Texels of the atlas, and the last frame's texels taken and shift.
     atlas_texels: u32,
     used: u32,
     shift: u32,
-    paged: bool,
-    pages: u32,
-    whole_texels: u64,
     /// Light index of each caster, in slot order.
     casters: Vec<u32>,
     /// `[largest side, filter, table, 0]`, each light's slot or `NO_SHADOW`, then the face table
@@ -204,7 +189,7 @@ pub struct ShadowMaps {
     entries: Buffer,
     /// The indirect draw's arguments and the entries counted (`shaders::shadow_cull::ARGS_WORDS`).
     args: Buffer,
-    /// The atlas: each face's distances from its first texel (`shaders::shadow::FaceMap`).
+    /// The atlas: each face's distances, row-major from its first texel.
     pub maps: Buffer,
 }
 
@@ -269,8 +254,8 @@ impl ShadowMaps {
             ShadowFaces::All => None,
         };
         let needed = match receivers {
-            Some(_) => Buffer::storage(ctx, "shadow face levels", 4 * NEEDED_WORDS as u64 * faces as u64)?,
-            None => Buffer::from_slice(ctx, "shadow face levels", &[cap_level(settings.resolution).max(1), u32::MAX, u32::MAX].repeat(faces))?,
+            Some(_) => Buffer::storage(ctx, "shadow face levels", 4 * faces as u64)?,
+            None => Buffer::from_slice(ctx, "shadow face levels", &vec![cap_level(settings.resolution).max(1); faces])?,
         };
         let maps = Self {
             levels_pipe: ComputePipeline::new(ctx, &gpu.compute_module, atlas_handles::SHADOW_FACE_LEVELS)?,
@@ -285,9 +270,6 @@ impl ShadowMaps {
             atlas_texels,
             used: 0,
             shift: 0,
-            paged: false,
-            pages: 0,
-            whole_texels: 0,
             records: Buffer::from_slice(ctx, "shadow caster records", &records_cpu)?,
             records_cpu,
             casters: list,
@@ -341,9 +323,6 @@ impl ShadowMaps {
     pub fn check_entries(&mut self) -> Result<()> {
         let args: Vec<u32> = self.args.read(ARGS_WORDS as usize)?;
         (self.counted, self.faces, self.used, self.shift) = (args[ARGS_COUNTED], args[ARGS_FACES], args[ARGS_USED], args[ARGS_SHIFT]);
-        (self.paged, self.pages) = (args[ARGS_PAGED] == 1 && self.receivers.is_some(), args[ARGS_PAGES..ARGS_PAGES + LEVELS as usize].iter().sum());
-        let cap = self.settings.resolution;
-        self.whole_texels = (1..LEVELS).map(|k| args[ARGS_LEVELS + k as usize] as u64 * (face_side(k, 0, cap) as u64).pow(2)).sum();
         if args[ARGS_COUNTED] > self.capacity {
             bail!("the shadow cull counted {} entries against the {} the host counted: shadow-map triangles would be missing", args[ARGS_COUNTED], self.capacity);
         }
@@ -368,9 +347,6 @@ impl ShadowMaps {
             atlas_texels: self.atlas_texels,
             atlas_used: self.used,
             shift: self.shift,
-            paged: self.paged,
-            pages: self.pages,
-            whole_texels: self.whole_texels,
             entries: self.counted,
             batches: self.spheres.len(),
             faces_with_receivers: self.faces,

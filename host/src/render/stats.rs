@@ -67,7 +67,7 @@ pub fn stats_json(device: &DeviceInfo, scene: &str, lights: usize, s: &Settings,
         // tested (`render::shadow_maps`).
         "shadows": frame.shadows.map(|sh| json!({
             "casters": sh.casters, "resolution": sh.resolution,
-            "atlas_texels": sh.atlas_texels, "atlas_used_texels": sh.atlas_used, "atlas_shift": sh.shift, "paged": sh.paged, "pages": sh.pages, "whole_face_texels": sh.whole_texels,
+            "atlas_texels": sh.atlas_texels, "atlas_used_texels": sh.atlas_used, "atlas_shift": sh.shift,
             "filter": format!("{:?}", s.shadow.filter).to_lowercase(),
             "raster": format!("{:?}", s.shadow.raster).to_lowercase(),
             "faces": format!("{:?}", s.shadow.faces).to_lowercase(), "faces_with_receivers": sh.faces_with_receivers,
